@@ -1,0 +1,54 @@
+"""The ``uvms-qp`` command line.
+
+Each sub-command lives in its own module of this package and exposes
+``register(subparsers) -> argparse.ArgumentParser`` which sets ``func=run`` on its parser.
+Adding a command is a one-file change: the modules are discovered at start-up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+from collections.abc import Sequence
+
+from ..errors import UvmsQpError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Return the top-level parser with every discovered sub-command registered."""
+    parser = argparse.ArgumentParser(
+        prog="uvms-qp",
+        description="Task-priority kinematic control for underwater vehicle-manipulator systems.",
+    )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"uvms-qp {__version__}")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
+        if info.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        register = getattr(module, "register", None)
+        if register is not None:
+            register(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``uvms-qp`` console script; returns the process exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "func", None) is None:
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except UvmsQpError as exc:
+        print(f"uvms-qp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
