@@ -1,0 +1,147 @@
+"""The lexicographic (hierarchical) least-squares solver on plain matrices.
+
+Levels ``L_1 > ... > L_p`` of rows ``lo_k <= A_k x <= hi_k`` are solved in priority order, each
+level minimising its weighted violation ``sum_i w_i s_i^2`` subject to the hard box and rows and to
+every higher level keeping the violation it reached; a final regularisation picks the minimum of
+``x' W x`` (``W`` diagonal). With equality levels only, full-rank levels and no active bound the
+answer is the recursive null-space solution of ``000_7b5f597fe4e36aa4.txt, Eq. (10)`` in the
+metric ``W`` (weighted pseudoinverse, ``000_7b5f597fe4e36aa4.txt, Eq. (17)``).
+
+Example:
+    >>> import numpy as np
+    >>> from uvms_qp.hqp import solve_hierarchy
+    >>> A1 = np.array([[1.0, 1.0, 0.0]])
+    >>> result = solve_hierarchy([[(A1, [1.0])]], lower=[-1, -1, -1], upper=[1, 1, 1])
+    >>> result.status.value, np.round(result.x, 6).tolist()
+    ('optimal', [0.5, 0.5, 0.0])
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import Any
+
+from .backends import BackendOutput
+from .evaluate import evaluate
+from .problem import Problem, normalize_problem
+from .registry import SOLVERS, SolverSpec, available_solvers, get_spec
+from .result import HierarchyResult, Status
+from .rows import Rows
+
+__all__ = [
+    "SOLVERS",
+    "HierarchyResult",
+    "HierarchySolver",
+    "Problem",
+    "Rows",
+    "SolverSpec",
+    "Status",
+    "available_solvers",
+    "normalize_problem",
+    "solve_hierarchy",
+]
+
+
+def _make_backend(spec: SolverSpec, options: dict[str, Any] | None) -> Any:
+    if spec.kind == "daqp":
+        from .backends.daqp_hierarchical import DaqpHierarchicalBackend
+
+        return DaqpHierarchicalBackend(spec, options)
+    if spec.kind == "cascade":
+        from .backends.cascade import CascadeBackend
+
+        return CascadeBackend(spec, options)
+    from .backends.nullspace import NullspaceBackend
+
+    return NullspaceBackend(spec, **(options or {}))
+
+
+class HierarchySolver:
+    """A reusable lexicographic solver: keeps the back-end workspace between calls.
+
+    Args:
+        solver: One of :func:`available_solvers` (``"daqp"``, ``"nullspace"``,
+            ``"cascade:<qpsolvers name>"``).
+        weights: Diagonal of the metric W of the final regularisation ``min x' W x``, shape (n,),
+            positive; None for the identity (e.g. ``[10, 10, 10, 1, 1, 1]`` moves the arm rather
+            than the vehicle, ``000_7b5f597fe4e36aa4.txt, Eq. (17)``).
+        options: Back-end options. Common keys: ``level_tol`` (relative tolerance deciding that a
+            level is met, default from the registry), ``hard_tol``; DAQP settings (``rho_soft``,
+            ``primal_tol``...); cascade ``rank_tol``, ``reg`` and qpsolvers settings; nullspace
+            ``rcond``.
+
+    Raises:
+        UnknownSolverError: unknown or uninstalled solver (lists installed ones, says what to
+            install).
+    """
+
+    def __init__(self, solver: str = "daqp", weights: Any = None,
+                 options: dict[str, Any] | None = None) -> None:
+        self.spec = get_spec(solver)
+        self.weights = weights
+        opts = dict(options or {})
+        self.level_tol = float(opts.pop("level_tol", self.spec.level_tol))
+        self.hard_tol = float(opts.pop("hard_tol", self.spec.hard_tol))
+        self._backend = _make_backend(self.spec, opts)
+
+    @property
+    def name(self) -> str:
+        """Name of the solver."""
+        return self.spec.name
+
+    def solve(self, levels: Sequence[Any], lower: Any = None, upper: Any = None,
+              hard: Sequence[Any] | None = None) -> HierarchyResult:
+        """Validate and solve one lexicographic problem.
+
+        Args:
+            levels: Levels, highest priority first; each a list of ``Rows``, ``(A, b)`` pairs or
+                ``(A, lo, hi)`` triples over x (shape (m, n)).
+            lower: Hard lower bounds on x (length n, ``-inf`` allowed), e.g. [m/s], [rad/s].
+            upper: Hard upper bounds on x (length n, ``+inf`` allowed).
+            hard: Hard general rows (never relaxed), same forms as a level.
+
+        Returns:
+            The result (never None; ``x`` always finite; see :class:`Status`).
+
+        Raises:
+            InputError: malformed input (shape, NaN/inf, lower > upper, inequality level given to
+                ``"nullspace"``), with a message naming the culprit.
+        """
+        problem = normalize_problem(levels, lower, upper, self.weights, hard)
+        return self.solve_problem(problem)
+
+    def solve_problem(self, problem: Problem) -> HierarchyResult:
+        """Solve an already normalised :class:`Problem` (skips validation)."""
+        start = time.perf_counter()
+        out: BackendOutput = self._backend.solve(problem)
+        elapsed = time.perf_counter() - start
+        return evaluate(problem, out.x, self.spec.name, out.status, out.message,
+                        level_tol=self.level_tol, hard_tol=self.hard_tol, solve_time=elapsed,
+                        info=out.info)
+
+
+def solve_hierarchy(
+    levels: Sequence[Any],
+    lower: Any = None,
+    upper: Any = None,
+    solver: str = "daqp",
+    weights: Any = None,
+    *,
+    hard: Sequence[Any] | None = None,
+    options: dict[str, Any] | None = None,
+) -> HierarchyResult:
+    """Solve a lexicographic problem once (see :class:`HierarchySolver` for the arguments).
+
+    Repeated calls with the same ``solver`` and no ``weights``/``options`` reuse one cached
+    :class:`HierarchySolver` (its back-end workspace), so a loop of calls stays cheap.
+    """
+    if weights is None and options is None:
+        cached = _CACHE.get(solver)
+        if cached is None:
+            cached = _CACHE[solver] = HierarchySolver(solver)
+        return cached.solve(levels, lower, upper, hard)
+    return HierarchySolver(solver, weights, options).solve(levels, lower, upper, hard)
+
+
+_CACHE: dict[str, HierarchySolver] = {}

@@ -1,0 +1,26 @@
+"""Back-ends of the lexicographic solver; each exposes ``solve(problem) -> BackendOutput``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..._validation import FloatArray
+from ..result import Status
+
+
+@dataclass
+class BackendOutput:
+    """What a back-end hands to :func:`uvms_qp.hqp.evaluate.evaluate`.
+
+    Attributes:
+        x: Solution or None on failure.
+        status: The back-end's verdict (OPTIMAL means "claims success"; the evaluation decides
+            between optimal and level_infeasible).
+        message: Detail for the user.
+        info: Back-end extras (exit flags, DAQP's own timing...).
+    """
+
+    x: FloatArray | None
+    status: Status = Status.OPTIMAL
+    message: str = ""
+    info: dict[str, object] = field(default_factory=dict)

@@ -1,0 +1,104 @@
+"""Turn a back-end's raw ``x`` into a :class:`HierarchyResult` with verified diagnostics.
+
+Every back-end ends here, so statuses mean the same thing everywhere: the hard box and rows are
+measured at ``x`` (never trusted from the back-end), each level's weighted residual
+``r_k = sqrt(sum_i w_i s_i^2)`` is recomputed, and the first level with
+``r_k > level_tol * scale_k`` (``scale_k = max(1, max |finite side|)``) is reported as unmet.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validation import FloatArray
+from .problem import Problem
+from .result import HierarchyResult, Status
+
+
+def hard_violation(problem: Problem, x: FloatArray) -> float:
+    """Largest violation of the hard box and hard rows at ``x`` (0 when feasible)."""
+    v = max(float(np.max(problem.lower - x, initial=0.0)),
+            float(np.max(x - problem.upper, initial=0.0)))
+    if problem.hard.m:
+        v = max(v, float(np.max(np.abs(problem.hard.violation(x)))))
+    return v
+
+
+def hard_scale(problem: Problem) -> float:
+    """Magnitude of the finite hard sides: ``max(1, max |finite bound or side|)``."""
+    sides = np.concatenate((problem.lower, problem.upper, problem.hard.lo, problem.hard.hi))
+    finite = sides[np.isfinite(sides)]
+    return float(max(1.0, np.abs(finite).max())) if finite.size else 1.0
+
+
+def safe_x(problem: Problem, x: FloatArray | None) -> FloatArray:
+    """Return a finite stand-in for a missing or non-finite ``x``: zero clipped to the box."""
+    if x is not None and np.all(np.isfinite(x)):
+        return x
+    return np.clip(np.zeros(problem.n), problem.lower, problem.upper)
+
+
+def evaluate(
+    problem: Problem,
+    x: FloatArray | None,
+    solver: str,
+    status: Status,
+    message: str,
+    *,
+    level_tol: float,
+    hard_tol: float,
+    solve_time: float,
+    info: dict[str, object] | None = None,
+) -> HierarchyResult:
+    """Measure ``x`` against the problem and build the result.
+
+    Args:
+        problem: The normalised problem.
+        x: The back-end's solution (None or non-finite on failure).
+        solver: Back-end name for the report.
+        status: The back-end's own verdict; OPTIMAL means "the back-end claims success".
+        message: Back-end detail to keep in the result.
+        level_tol: Relative tolerance deciding whether a level is met.
+        hard_tol: Relative tolerance on the hard box and rows.
+        solve_time: Wall time of the solve [s].
+        info: Back-end extras.
+
+    Returns:
+        The result; a claimed success that violates the hard rows is downgraded to BACKEND_ERROR.
+    """
+    if x is None or not np.all(np.isfinite(x)):
+        if status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
+            status = Status.BACKEND_ERROR
+            message = (message + "; " if message else "") + "back-end returned no finite x"
+        x = safe_x(problem, x)
+    slacks = [block.violation(x) for block in problem.levels]
+    residuals = [float(np.sqrt(b.w @ (s * s))) for b, s in zip(problem.levels, slacks, strict=True)]
+    hv = hard_violation(problem, x)
+    infeasible_level = None
+    if status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
+        if hv > hard_tol * hard_scale(problem):
+            status = Status.BACKEND_ERROR
+            message = (message + "; " if message else "") + f"hard rows violated by {hv:.2e}"
+        else:
+            status = Status.OPTIMAL
+            for k, (block, r) in enumerate(zip(problem.levels, residuals, strict=True)):
+                if r > level_tol * block.scale():
+                    infeasible_level = k
+                    status = Status.LEVEL_INFEASIBLE
+                    break
+    tol_lo = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(problem.lower), problem.lower, 0.0)))
+    tol_hi = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(problem.upper), problem.upper, 0.0)))
+    return HierarchyResult(
+        x=x,
+        status=status,
+        solver=solver,
+        level_residuals=residuals,
+        level_slacks=slacks,
+        infeasible_level=infeasible_level,
+        active_lower=x - problem.lower <= tol_lo,
+        active_upper=problem.upper - x <= tol_hi,
+        hard_violation=hv,
+        solve_time=solve_time,
+        message=message,
+        info=info or {},
+    )

@@ -1,0 +1,142 @@
+"""The solver registry: ordered data with capability flags and per-back-end tolerances.
+
+Availability is checked with :func:`importlib.util.find_spec`, without importing the back-end.
+Adding a back-end is a data change here plus (for a new kind) one module in ``backends/``; see
+``docs/solver.md``, "Adding a back-end".
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from ..errors import UnknownSolverError
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    """Description of one solver choice.
+
+    Attributes:
+        name: Public name (``"daqp"``, ``"nullspace"``, ``"cascade:<qpsolvers name>"``).
+        kind: Implementation family: ``"daqp"``, ``"nullspace"`` or ``"cascade"``.
+        modules: Python modules that must be importable for the solver to be available.
+        pip: pip package(s) that provide the modules.
+        inequality_levels: Can solve levels with inequality rows.
+        bounds: Enforces the hard box and hard rows (otherwise only checks them).
+        exact: Active-set / direct method: results agree to round-off.
+        agreement_tol: Maximum difference ``|x - x_nullspace|_inf`` on well-posed equality
+            problems (relative to ``max(1, |x|_inf)``), as tested.
+        level_tol: Relative tolerance deciding that a level is met.
+        hard_tol: Relative tolerance on the hard box and rows before a result is rejected.
+        freeze_margin: Absolute margin added to frozen inequality slacks of higher levels.
+        settings: Keyword settings passed to the back-end (qpsolvers or DAQP).
+        sparse: The back-end takes sparse (CSC) matrices only; the cascade converts for it.
+    """
+
+    name: str
+    kind: str
+    modules: tuple[str, ...]
+    pip: str
+    inequality_levels: bool = True
+    bounds: bool = True
+    exact: bool = True
+    agreement_tol: float = 1e-8
+    level_tol: float = 1e-6
+    hard_tol: float = 1e-9
+    freeze_margin: float = 1e-9
+    settings: MappingProxyType[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    sparse: bool = False
+
+    @property
+    def qp_name(self) -> str:
+        """Name of the qpsolvers back-end for a cascade (empty otherwise)."""
+        return self.name.split(":", 1)[1] if self.kind == "cascade" else ""
+
+    @property
+    def available(self) -> bool:
+        """True when every required module can be imported (checked without importing)."""
+        return all(importlib.util.find_spec(m) is not None for m in self.modules)
+
+
+def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: float,
+             freeze_margin: float, sparse: bool = False, **settings: Any) -> SolverSpec:
+    return SolverSpec(
+        name=f"cascade:{name}",
+        kind="cascade",
+        modules=("qpsolvers", module),
+        pip=f"qpsolvers {pip}",
+        exact=exact,
+        agreement_tol=agreement_tol,
+        freeze_margin=freeze_margin,
+        settings=MappingProxyType({"verbose": False, **settings}),
+        sparse=sparse,
+    )
+
+
+#: Every solver uvms-qp knows, in order of preference.
+SOLVERS: tuple[SolverSpec, ...] = (
+    SolverSpec(
+        name="daqp",
+        kind="daqp",
+        modules=("daqp",),
+        pip="daqp",
+        exact=False,  # soft-row regularisation rho_soft biases results by about rho_soft * 1e3
+        agreement_tol=1e-6,
+        settings=MappingProxyType({"rho_soft": 1e-10, "primal_tol": 1e-10}),
+    ),
+    SolverSpec(
+        name="nullspace",
+        kind="nullspace",
+        modules=("numpy",),
+        pip="numpy",
+        inequality_levels=False,
+        bounds=False,
+        agreement_tol=1e-10,
+    ),
+    _cascade("quadprog", "quadprog", "quadprog", exact=True, agreement_tol=1e-8,
+             freeze_margin=1e-10),
+    _cascade("daqp", "daqp", "daqp", exact=True, agreement_tol=1e-8, freeze_margin=1e-10,
+             primal_tol=1e-10),
+    _cascade("proxqp", "proxsuite", "proxsuite", exact=False, agreement_tol=1e-6,
+             freeze_margin=1e-8, eps_abs=1e-10, eps_rel=0.0, max_iter=10_000),
+    _cascade("piqp", "piqp", "piqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-8,
+             eps_abs=1e-10, eps_rel=1e-12),
+    _cascade("clarabel", "clarabel", "clarabel", exact=False, agreement_tol=1e-6,
+             freeze_margin=1e-8, sparse=True, tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10),
+    _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-6, freeze_margin=1e-8,
+             sparse=True),
+    _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-4, freeze_margin=1e-6,
+             sparse=True,
+             eps_abs=1e-9, eps_rel=1e-9, max_iter=200_000, polish=False),
+)
+
+_BY_NAME = {spec.name: spec for spec in SOLVERS}
+
+
+def available_solvers() -> list[str]:
+    """Names of the solvers whose back-ends are installed, in order of preference."""
+    return [spec.name for spec in SOLVERS if spec.available]
+
+
+def get_spec(name: str) -> SolverSpec:
+    """Return the spec of an installed solver.
+
+    Raises:
+        UnknownSolverError: the name is unknown, or its back-end is not installed (the message
+            lists the installed solvers and the pip package to install).
+    """
+    spec = _BY_NAME.get(name) if isinstance(name, str) else None
+    if spec is None:
+        hint = "known solvers: " + ", ".join(_BY_NAME)
+        if isinstance(name, str) and name.startswith("cascade:"):
+            hint = ("cascades exist for the qpsolvers back-ends "
+                    + ", ".join(s.qp_name for s in SOLVERS if s.kind == "cascade"))
+        raise UnknownSolverError(name, available_solvers(), hint)
+    if not spec.available:
+        raise UnknownSolverError(
+            name, available_solvers(), f"{name} is not installed; install it with "
+            f"`pip install {spec.pip}`")
+    return spec

@@ -1,0 +1,89 @@
+"""The result of a lexicographic solve: status vocabulary and per-level diagnostics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+import numpy as np
+
+from .._validation import FloatArray
+
+
+class Status(StrEnum):
+    """Outcome of a hierarchy solve.
+
+    Members:
+        OPTIMAL: every level is met (to tolerance) and the hard rows hold.
+        LEVEL_INFEASIBLE: ``x`` is the lexicographic optimum, but some level cannot be met exactly;
+            ``HierarchyResult.infeasible_level`` is the first such level.
+        HARD_INFEASIBLE: the hard box and hard rows admit no point; ``x`` is only a finite
+            placeholder (the closest point the back-end reached).
+        BACKEND_ERROR: the back-end failed or could not enforce a requirement (message says which);
+            ``x`` is finite but must not be used as a lexicographic optimum.
+    """
+
+    OPTIMAL = "optimal"
+    LEVEL_INFEASIBLE = "level_infeasible"
+    HARD_INFEASIBLE = "hard_infeasible"
+    BACKEND_ERROR = "backend_error"
+
+
+@dataclass(eq=False)
+class HierarchyResult:
+    """Solution of a lexicographic problem with diagnostics; never None, ``x`` never NaN.
+
+    Attributes:
+        x: Solution, shape (n,), always finite (units of the decision vector, e.g. [m/s], [rad/s]).
+        status: Outcome, see :class:`Status`.
+        solver: Name of the back-end that produced ``x``.
+        level_residuals: Weighted violation norm ``sqrt(sum_i w_i s_i^2)`` per level.
+        level_slacks: Signed slack per level, ``s = A x - clip(A x, lo, hi)``.
+        infeasible_level: Index of the first level not met exactly, or None.
+        active_lower: Mask of variables at their lower bound (to tolerance).
+        active_upper: Mask of variables at their upper bound (to tolerance).
+        hard_violation: Largest violation of the hard box and hard rows at ``x``.
+        solve_time: Wall time of the solve [s], validation excluded.
+        message: Human-readable detail (back-end exit flags, which bound, ...).
+        info: Back-end specific extras (e.g. DAQP's own reported solve time, iterations).
+    """
+
+    x: FloatArray
+    status: Status
+    solver: str
+    level_residuals: list[float] = field(default_factory=list)
+    level_slacks: list[FloatArray] = field(default_factory=list)
+    infeasible_level: int | None = None
+    active_lower: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    active_upper: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    hard_violation: float = 0.0
+    solve_time: float = 0.0
+    message: str = ""
+    info: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """True when ``x`` is the lexicographic optimum (optimal or level_infeasible)."""
+        return self.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+
+    def summary(self) -> str:
+        """Return a short multi-line report a person can read."""
+        lines = [
+            f"solver {self.solver}: {self.status.value}"
+            + (f" (first unmet level {self.infeasible_level})"
+               if self.infeasible_level is not None else "")
+            + f" in {self.solve_time * 1e6:.1f} us",
+        ]
+        for k, r in enumerate(self.level_residuals):
+            mark = ""
+            if self.ok:
+                mark = "NOT met" if k == self.infeasible_level else (
+                    "met" if self.infeasible_level is None or k < self.infeasible_level else "")
+            lines.append(f"  level {k}: residual {r:.3e} ({self.level_slacks[k].size} rows) {mark}"
+                         .rstrip())
+        n_lo, n_hi = int(self.active_lower.sum()), int(self.active_upper.sum())
+        lines.append(f"  active bounds: {n_lo} lower, {n_hi} upper; "
+                     f"hard violation {self.hard_violation:.1e}")
+        if self.message:
+            lines.append(f"  {self.message}")
+        return "\n".join(lines)
