@@ -1,0 +1,63 @@
+"""A constant, horizontal water current.
+
+The kinematic simulation has no hydrodynamics. The current plays two roles:
+
+- it gives a heading ``psi_c`` [rad] (world NED, measured from north toward east) that a
+  current-alignment task turns the vehicle toward (``001_0fa6eac0390842e0.txt``, Eq. (23)-(26)
+  and its simulation: vehicle kept at rest with its yaw aligned to a current at 0.78 rad);
+- optionally, it drifts the vehicle: a fraction ``drift`` of the current velocity
+  ``v_c = speed [cos psi_c, sin psi_c, 0]`` [m/s] is added to the vehicle's world position rate,
+  an unmodelled disturbance that the closed-loop tasks must reject. ``drift = 0`` (default) keeps
+  the simulation purely kinematic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._validation import FloatArray, as_scalar
+from ..errors import InputError
+
+
+class ConstantCurrent:
+    """A constant horizontal current.
+
+    Args:
+        direction: Direction the water flows toward [rad], world NED yaw (0 = north, pi/2 = east).
+        speed: Current speed [m/s] (>= 0).
+        drift: Fraction of the current velocity that displaces the vehicle, in [0, 1].
+    """
+
+    def __init__(self, direction: float, speed: float = 0.0, drift: float = 0.0) -> None:
+        self.direction = as_scalar(direction, "direction")
+        self.speed = as_scalar(speed, "speed", nonnegative=True)
+        self.drift = as_scalar(drift, "drift", nonnegative=True)
+        if self.drift > 1.0:
+            raise InputError(f"drift: expected a fraction in [0, 1], got {self.drift}")
+
+    @property
+    def heading(self) -> float:
+        """Heading of the current [rad], wrapped to (-pi, pi]."""
+        return wrap_angle(self.direction)
+
+    def velocity(self) -> FloatArray:
+        """Current velocity ``v_c`` (3,) [m/s] in the world frame (horizontal)."""
+        return self.speed * np.array([math.cos(self.direction), math.sin(self.direction), 0.0])
+
+    def drift_velocity(self) -> FloatArray:
+        """World velocity added to the vehicle by the current, ``drift * v_c`` (3,) [m/s]."""
+        return self.drift * self.velocity()
+
+    def __repr__(self) -> str:
+        return (
+            f"ConstantCurrent(direction={self.direction:g}, speed={self.speed:g}, "
+            f"drift={self.drift:g})"
+        )
+
+
+def wrap_angle(angle: float) -> float:
+    """Wrap an angle [rad] to (-pi, pi]."""
+    wrapped = math.remainder(angle, 2.0 * math.pi)
+    return math.pi if wrapped == -math.pi else wrapped
