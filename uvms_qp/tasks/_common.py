@@ -1,0 +1,130 @@
+"""Small helpers shared by the task modules (axis parsing, angle wrapping, rotation checks)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .._validation import FloatArray, as_matrix, as_vector
+from ..errors import InputError, ShapeError, UnknownJointError
+
+TWIST_AXES = ("x", "y", "z", "rx", "ry", "rz")
+"""Row names of a twist ``[v; omega]``: linear x, y, z [m/s] then angular x, y, z [rad/s]."""
+
+
+def wrap_angle(angle: float | FloatArray) -> Any:
+    """Wrap an angle [rad] (or an array of angles) to ``[-pi, pi)``."""
+    return (np.asarray(angle) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def parse_axes(axes: Any, allowed: Sequence[str], label: str) -> list[str]:
+    """Validate a list of axis names (each in ``allowed``, no duplicates) and return it.
+
+    A single string is accepted as one axis (``"z"``) or as a compact list (``"xy"`` -> x, y)
+    when every character is an allowed axis.
+    """
+    if isinstance(axes, str):
+        if axes in allowed:
+            axes = [axes]
+        elif all(c in allowed for c in axes):
+            axes = list(axes)
+        else:
+            raise InputError(f"{label}: unknown axis {axes!r}; known axes: {', '.join(allowed)}")
+    if not isinstance(axes, list | tuple) or not axes:
+        raise InputError(f"{label}: expected a non-empty list of axis names from "
+                         f"{', '.join(allowed)}, got {axes!r}")
+    out: list[str] = []
+    for a in axes:
+        if a not in allowed:
+            raise InputError(f"{label}: unknown axis {a!r}; known axes: {', '.join(allowed)}")
+        if a in out:
+            raise InputError(f"{label}: axis {a!r} given twice")
+        out.append(a)
+    return out
+
+
+def as_rotation(value: Any, label: str) -> FloatArray:
+    """Validate a rotation: a 3x3 orthonormal matrix with det +1, or ``[roll, pitch, yaw]`` [rad].
+
+    Euler angles follow the Z-Y-X convention: ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
+
+    Raises:
+        ShapeError: neither 3 angles nor a 3x3 matrix.
+        InputError: a matrix that is not a rotation (orthonormality tolerance 1e-6).
+    """
+    try:
+        ndim = np.ndim(value)
+    except ValueError as exc:  # ragged nested lists
+        raise ShapeError(f"{label}: expected 3 angles or a 3x3 matrix") from exc
+    if ndim <= 1:
+        rpy = as_vector(value, label, 3)
+        return np.asarray(pin.rpy.rpyToMatrix(rpy), dtype=np.float64)
+    R = as_matrix(value, label, 3, 3)
+    err = float(np.abs(R.T @ R - np.eye(3)).max())
+    if err > 1e-6:
+        raise InputError(f"{label}: not a rotation matrix (|R'R - I| = {err:.2e})")
+    if np.linalg.det(R) < 0.0:
+        raise InputError(f"{label}: not a rotation matrix (det < 0, a reflection)")
+    return R
+
+
+def as_point(value: Any, label: str) -> FloatArray:
+    """A 3-vector [m]; a planar 2-vector gets ``z = 0``."""
+    p = as_vector(value, label)
+    if p.shape[0] == 2:
+        p = np.array([p[0], p[1], 0.0])
+    if p.shape[0] != 3:
+        raise ShapeError(f"{label}: expected 2 or 3 coordinates, got {p.shape[0]}")
+    return p
+
+
+def joint_indices(model: Any, joints: Sequence[str] | None, label: str) -> np.ndarray:
+    """Indices (into the arm joint vector) of the named joints; all joints when None."""
+    names = tuple(model.joint_names)
+    if joints is None:
+        return np.arange(len(names))
+    out = []
+    for j in joints:
+        if j not in names:
+            raise UnknownJointError(j, names)
+        out.append(names.index(j))
+    if len(set(out)) != len(out):
+        raise InputError(f"{label}: a joint is named twice")
+    return np.asarray(out, dtype=int)
+
+
+def check_joint_list(joints: Any, label: str) -> list[str] | None:
+    """Validate an optional list of joint names (type only; existence is checked at bind)."""
+    if joints is None:
+        return None
+    if isinstance(joints, str):
+        joints = [joints]
+    if not isinstance(joints, list | tuple) or not joints or not all(
+        isinstance(j, str) for j in joints
+    ):
+        raise InputError(f"{label}: expected a non-empty list of joint names, got {joints!r}")
+    return list(joints)
+
+
+def check_frame(model: Any, frame: Any, label: str) -> str:
+    """Check that ``frame`` names a frame of ``model`` (raises UnknownFrameError otherwise)."""
+    if not isinstance(frame, str):
+        raise InputError(f"{label}: expected a frame name, got {type(frame).__name__}")
+    model.frame_id(frame)  # raises UnknownFrameError listing the known frames
+    return frame
+
+
+def eta_axes(model: Any) -> tuple[str, ...]:
+    """Names of the vehicle pose coordinates of ``model`` (``eta``)."""
+    if model.vehicle_kind == "planar":
+        return ("x", "y", "psi")
+    if model.vehicle_kind == "spatial":
+        return ("x", "y", "z", "phi", "theta", "psi")
+    return ()
+
+
+ANGLE_AXES = frozenset({"phi", "theta", "psi"})

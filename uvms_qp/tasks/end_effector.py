@@ -1,0 +1,232 @@
+"""End-effector (any frame) position / orientation / pose tracking task."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+import pinocchio as pin
+
+from .._validation import FloatArray, as_vector
+from ..errors import InputError
+from ._common import TWIST_AXES, as_point, as_rotation, check_frame, parse_axes
+from .task import ErrorTask
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+_MODE_AXES = {
+    "position": ("x", "y", "z"),
+    "orientation": ("rx", "ry", "rz"),
+    "pose": TWIST_AXES,
+}
+
+
+class EndEffectorTask(ErrorTask):
+    r"""Track the position, orientation or full pose of a frame, on any subset of world axes.
+
+    Closed-loop inverse kinematics (``000_7b5f597fe4e36aa4.txt, Eq. (16)``), in world axes:
+
+    * position rows:  ``J_p zeta = p_dot_d + K (p_d - p)``, error [m], rows [m/s];
+    * orientation rows: with ``R_e = R_d R^T`` and ``e_o = log(R_e)`` (SO(3) log map, world axes,
+      [rad]) the exact error dynamics are ``e_o_dot = Jlog(R_e)^T omega_d - Jlog(R_e) omega``
+      (``Jlog`` = inverse right Jacobian of SO(3)), hence the rows
+      ``Jlog(R_e) J_omega zeta = Jlog(R_e)^T omega_d + K e_o`` [rad/s].
+
+    ``J_p``, ``J_omega`` are the frame's position and angular Jacobians over zeta (world axes).
+    The selected axes pick rows of ``[e_p; e_o]`` (``x, y, z, rx, ry, rz``). Planar models default
+    to ``x, y`` (position), ``rz`` (orientation).
+
+    The target is either fixed (``position`` [m], ``rotation`` 3x3 or ``[roll, pitch, yaw]``
+    [rad]) or a trajectory (any object with ``sample(t)`` returning ``position``, ``velocity``
+    and optionally ``rotation``, ``angular_velocity``, world frame); change it at run time with
+    :meth:`set_target` or :meth:`track`.
+
+    Args:
+        frame: Name of the controlled frame (default ``"tool"``).
+        mode: ``"position"``, ``"orientation"`` or ``"pose"``.
+        axes: Subset of the mode's axes to control (None: all; planar models: the in-plane ones).
+        position: Fixed target position (3,) [m], world frame.
+        rotation: Fixed target rotation ``R_world_frame`` (3x3) or ``[roll, pitch, yaw]`` [rad].
+        trajectory: Object with ``sample(t)`` (see above); overrides the fixed target.
+        gain: Gain K [1/s], scalar or one per selected axis.
+        weight: Weight within the level.
+        name: Task name (default ``"end_effector"``).
+    """
+
+    type_name = "end_effector"
+    error_unit = "m, rad"
+    rate_unit = "m/s, rad/s"
+
+    def __init__(
+        self,
+        frame: str = "tool",
+        *,
+        mode: Literal["position", "orientation", "pose"] = "position",
+        axes: list[str] | None = None,
+        position: list[float] | None = None,
+        rotation: list[list[float]] | list[float] | None = None,
+        trajectory: Any = None,
+        gain: float | list[float] = 1.0,
+        weight: float = 1.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(name=name, weight=weight, gain=gain)
+        if not isinstance(frame, str) or not frame:
+            raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
+        if mode not in _MODE_AXES:
+            raise InputError(f"{self.name}.mode: expected one of {', '.join(_MODE_AXES)}, "
+                             f"got {mode!r}")
+        self.frame = frame
+        self.mode = mode
+        self._axes_arg = None if axes is None else parse_axes(
+            axes, _MODE_AXES[mode], f"{self.name}.axes")
+        self.axes: list[str] = []
+        self._p_d: FloatArray | None = None
+        self._R_d: FloatArray | None = None
+        self._v_d = np.zeros(3)
+        self._w_d = np.zeros(3)
+        self._trajectory: Any = None
+        self._sel = np.arange(0)
+        self._need_p = mode != "orientation"
+        self._need_o = mode != "position"
+        self._e6 = np.zeros(6)
+        self._Jlog = np.eye(3)
+        if position is not None or rotation is not None:
+            self.set_target(position=position, rotation=rotation)
+        if trajectory is not None:
+            self.track(trajectory)
+
+    # ------------------------------------------------------------------------------------ target
+    def set_target(self, position: Any = None, rotation: Any = None, velocity: Any = None,
+                   angular_velocity: Any = None) -> None:
+        """Set a fixed target (and optional feed-forward rates); stops tracking a trajectory.
+
+        Args:
+            position: Target position (3,) [m], world frame (planar: 2 values allowed).
+            rotation: Target rotation (3x3, orthonormal) or ``[roll, pitch, yaw]`` [rad].
+            velocity: Feed-forward linear velocity (3,) [m/s] (default zero).
+            angular_velocity: Feed-forward angular velocity (3,) [rad/s], world axes.
+        """
+        if position is not None:
+            self._p_d = as_point(position, f"{self.name}.position")
+        if rotation is not None:
+            self._R_d = as_rotation(rotation, f"{self.name}.rotation")
+        self._v_d = np.zeros(3) if velocity is None else as_point(velocity, f"{self.name}.velocity")
+        self._w_d = (np.zeros(3) if angular_velocity is None
+                     else as_vector(angular_velocity, f"{self.name}.angular_velocity", 3))
+        self._trajectory = None
+
+    def track(self, trajectory: Any) -> None:
+        """Follow ``trajectory`` (an object with ``sample(t)``) from now on."""
+        if not callable(getattr(trajectory, "sample", None)):
+            raise InputError(f"{self.name}.trajectory: expected an object with sample(t), "
+                             f"got {type(trajectory).__name__}")
+        self._trajectory = trajectory
+
+    @property
+    def has_target(self) -> bool:
+        """True when a target (fixed or trajectory) is set for what the mode needs."""
+        if self._trajectory is not None:
+            return True
+        return (not self._need_p or self._p_d is not None) and (
+            not self._need_o or self._R_d is not None)
+
+    def target(self, t: float) -> tuple[FloatArray | None, FloatArray | None]:
+        """Target ``(position [m], rotation)`` at time ``t`` [s] (None where not set)."""
+        self._sample(t)
+        return self._p_d, self._R_d
+
+    def _sample(self, t: float) -> None:
+        traj = self._trajectory
+        if traj is None:
+            if not self.has_target:
+                missing = "position" if self._need_p and self._p_d is None else "rotation"
+                raise InputError(f"task {self.name!r}: target never set (no {missing} and no "
+                                 "trajectory); pass position=/rotation=/trajectory= or call "
+                                 "set_target()/track()")
+            return
+        s = traj.sample(t)
+        self._p_d = s.position
+        self._v_d = s.velocity
+        if self._need_o:
+            rot = getattr(s, "rotation", None)
+            if rot is not None:
+                self._R_d = rot
+                w = getattr(s, "angular_velocity", None)
+                self._w_d = np.zeros(3) if w is None else w
+            elif self._R_d is None:
+                raise InputError(f"task {self.name!r}: the trajectory has no orientation and no "
+                                 "fixed rotation target is set")
+            else:
+                self._w_d = np.zeros(3)
+
+    # ----------------------------------------------------------------------------------- binding
+    def _bind(self, model: Model) -> int:
+        check_frame(model, self.frame, f"{self.name}.frame")
+        if self._axes_arg is not None:
+            axes = self._axes_arg
+        elif model.vehicle_kind == "planar":
+            axes = {"position": ["x", "y"], "orientation": ["rz"], "pose": ["x", "y", "rz"]}[
+                self.mode]
+        else:
+            axes = list(_MODE_AXES[self.mode])
+        self.axes = axes
+        self._sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
+        if self.mode == "orientation":
+            self._sel_local = self._sel - 3
+        else:
+            self._sel_local = self._sel
+        return len(axes)
+
+    # -------------------------------------------------------------------------------- evaluation
+    def compute_error(self, state: State, t: float) -> FloatArray:
+        """Error ``[p_d - p; log(R_d R^T)]`` on the selected axes [m, rad], world axes."""
+        self._sample(t)
+        e6 = self._e6
+        if self._need_p:
+            e6[:3] = self._p_d - state.position(self.frame)  # type: ignore[operator]
+        if self._need_o:
+            R_e = self._R_d @ state.rotation(self.frame).T  # type: ignore[union-attr]
+            e6[3:] = pin.log3(R_e)
+            self._Jlog = pin.Jlog3(R_e)
+        return e6[self._sel]
+
+    def compute_jacobian(self, state: State, t: float) -> FloatArray:
+        """Jacobian of the regulated quantity over zeta on the selected axes.
+
+        Position rows ``J_p``; orientation rows ``Jlog(R_e) J_omega`` (uses the ``R_e`` of the
+        last :meth:`compute_error` call at the same state).
+        """
+        if self.mode == "position":
+            return state.jacobian(self.frame, rows="position")[self._sel]
+        if self.mode == "orientation":
+            return (self._Jlog @ state.jacobian(self.frame, rows="orientation"))[self._sel_local]
+        J = state.jacobian(self.frame, rows="twist").copy()
+        J[3:] = self._Jlog @ J[3:]
+        return J[self._sel]
+
+    def compute_feedforward(self, state: State, t: float) -> FloatArray:
+        """Feed-forward ``[p_dot_d; Jlog(R_e)^T omega_d]`` on the selected axes."""
+        ff = np.empty(6)
+        ff[:3] = self._v_d
+        ff[3:] = self._Jlog.T @ self._w_d if self._need_o else 0.0
+        return ff[self._sel]
+
+    def updatable(self) -> tuple[str, ...]:
+        """Parameters accepted by :meth:`update`."""
+        return (*super().updatable(), "position", "rotation", "trajectory")
+
+    def _apply_update(self, key: str, value: Any) -> None:
+        if key == "position":
+            self._p_d = as_point(value, f"{self.name}.position")
+            self._v_d = np.zeros(3)
+            self._trajectory = None
+        elif key == "rotation":
+            self._R_d = as_rotation(value, f"{self.name}.rotation")
+            self._w_d = np.zeros(3)
+            self._trajectory = None
+        elif key == "trajectory":
+            self.track(value)
+        else:
+            super()._apply_update(key, value)

@@ -1,0 +1,180 @@
+"""Joint limits as a task: paper 003's index as a gradient objective, or a margin inequality."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from .._validation import FloatArray, as_scalar, as_vector
+from ..errors import InputError
+from ._common import check_joint_list, joint_indices
+from .task import Task
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+
+def joint_limit_index(q: FloatArray, lower: FloatArray, upper: FloatArray,
+                      strength: FloatArray) -> tuple[float, FloatArray]:
+    r"""Joint-limit index and its gradient, ``003_229789978cc4b235.txt, Eq. (15)-(16)``.
+
+    ``H(q) = sum_i (q_max,i - q_min,i)^2 / (C_i (q_max,i - q) (q - q_min,i))`` (dimensionless,
+    minimum ``4 / C_i`` per joint at mid-range, infinite at a limit) and
+    ``dH/dq_i = (q_max - q_min)^2 (2 q_i - q_max - q_min) / (C_i (q_max - q_i)^2 (q_i - q_min)^2)``
+    [1/rad]. Joints at a limit get their distances clipped to 1e-9 of the range (finite values).
+
+    Args:
+        q: Joint angles [rad].
+        lower: ``q_min`` [rad] (finite).
+        upper: ``q_max`` [rad] (finite).
+        strength: ``C_i`` (positive).
+
+    Returns:
+        ``(H, grad H)``.
+    """
+    span = upper - lower
+    tiny = 1e-9 * span
+    a = np.maximum(upper - q, tiny)
+    b = np.maximum(q - lower, tiny)
+    H = float(np.sum(span * span / (strength * a * b)))
+    grad = span * span * (2.0 * q - upper - lower) / (strength * a * a * b * b)
+    return H, grad
+
+
+class JointLimitTask(Task):
+    r"""Keep arm joints away from their limits.
+
+    Modes:
+
+    * ``"gradient"``: rows ``qdot_S = -lambda grad H`` (one per joint with finite limits,
+      [rad/s]), the gradient-projection use of the index ``H`` of
+      ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see :func:`joint_limit_index`); with
+      ``normalize=True`` the gradient is divided by its norm (Eq. (11)).
+    * ``"margin"``: inequality rows
+      ``gain (q_min + margin - q) <= qdot <= gain (q_max - margin - q)`` [rad/s]: the joints are
+      steered to stay ``margin`` [rad] inside their limits (a soft, prioritised version of the
+      hard :class:`~uvms_qp.constraints.JointPositionBounds`).
+
+    Joints without finite limits are skipped.
+
+    Args:
+        mode: ``"gradient"`` or ``"margin"``.
+        joints: Joint names (default: all arm joints with finite limits).
+        gain: ``lambda`` [rad^2/s] (gradient) or the margin gain [1/s].
+        strength: ``C_i`` of Eq. (15), a number or one per selected joint (default 1).
+        margin: Distance kept inside the limits [rad] (mode ``"margin"``).
+        normalize: Normalise the gradient (mode ``"gradient"``).
+        weight: Weight within the level.
+        name: Task name (default ``"joint_limit"``).
+    """
+
+    type_name = "joint_limit"
+    error_unit = "1 | rad"
+    rate_unit = "rad/s"
+
+    def __init__(
+        self,
+        *,
+        mode: Literal["gradient", "margin"] = "margin",
+        joints: list[str] | None = None,
+        gain: float = 1.0,
+        strength: float | list[float] = 1.0,
+        margin: float = 0.1,
+        normalize: bool = False,
+        weight: float = 1.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(name=name, weight=weight)
+        if mode not in ("gradient", "margin"):
+            raise InputError(f"{self.name}.mode: expected 'gradient' or 'margin', got {mode!r}")
+        if not isinstance(normalize, bool):
+            raise InputError(f"{self.name}.normalize: expected true or false")
+        self.mode = mode
+        self.joints = check_joint_list(joints, f"{self.name}.joints")
+        self.gain = as_scalar(gain, f"{self.name}.gain", positive=True)
+        self.margin = as_scalar(margin, f"{self.name}.margin", nonnegative=True)
+        self.normalize = normalize
+        if isinstance(strength, list | tuple | np.ndarray):
+            self._strength_arg: float | FloatArray = as_vector(strength, f"{self.name}.strength")
+            if np.any(self._strength_arg <= 0.0):
+                raise InputError(f"{self.name}.strength: expected positive values")
+        else:
+            self._strength_arg = as_scalar(strength, f"{self.name}.strength", positive=True)
+        self._idx = np.zeros(0, dtype=int)
+        self._lo = self._hi = self._C = np.zeros(0)
+        self._A = np.zeros((0, 0))
+        self.value = float("nan")
+
+    def _bind(self, model: Model) -> int:
+        idx = joint_indices(model, self.joints, f"{self.name}.joints")
+        lo = np.asarray(model.joint_lower, dtype=float)[idx]
+        hi = np.asarray(model.joint_upper, dtype=float)[idx]
+        finite = np.isfinite(lo) & np.isfinite(hi)
+        if self.joints is not None and not finite.all():
+            bad = [self.joints[i] for i in np.flatnonzero(~finite)]
+            raise InputError(f"{self.name}.joints: {bad} have no finite limits")
+        if isinstance(self._strength_arg, np.ndarray):
+            if self._strength_arg.shape[0] != idx.size:
+                raise InputError(f"{self.name}.strength: expected {idx.size} values, got "
+                                 f"{self._strength_arg.shape[0]}")
+            C = self._strength_arg[finite]
+        else:
+            C = np.full(int(finite.sum()), self._strength_arg)
+        idx, lo, hi = idx[finite], lo[finite], hi[finite]
+        if idx.size == 0:
+            raise InputError(f"{self.name}: model {model.name!r} has no joint with finite limits")
+        if self.mode == "margin" and np.any(hi - lo <= 2.0 * self.margin):
+            j = int(np.flatnonzero(hi - lo <= 2.0 * self.margin)[0])
+            raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
+                             f"limits of joint {model.joint_names[idx[j]]!r}")
+        self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
+        self._A = np.zeros((idx.size, model.nv))
+        self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
+        return int(idx.size)
+
+    @property
+    def joint_indices(self) -> np.ndarray:
+        """Indices (into the arm joints) of the regulated joints."""
+        return self._idx
+
+    def compute_value(self, state: State) -> tuple[float, FloatArray]:
+        """``(H, grad H)`` on the regulated joints at ``state`` (Eq. (15)-(16))."""
+        return joint_limit_index(state.joints[self._idx], self._lo, self._hi, self._C)
+
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write the gradient rows or the margin band (see the class docstring)."""
+        A[:] = self._A
+        if self.mode == "margin":
+            q = state.joints[self._idx]
+            np.multiply(self.gain, self._lo + self.margin - q, out=lower)
+            np.multiply(self.gain, self._hi - self.margin - q, out=upper)
+            dist = np.minimum(q - self._lo, self._hi - q)
+            self._last_error = np.array([float(dist.min())])
+            return
+        H, g = self.compute_value(state)
+        self.value = H
+        self._last_error = np.array([H])
+        scale = -self.gain
+        if self.normalize:
+            norm = float(np.sqrt(g @ g))
+            scale = scale / norm if norm > 1e-12 else 0.0
+        np.multiply(scale, g, out=lower)
+        upper[:] = lower
+
+    def updatable(self) -> tuple[str, ...]:
+        """Parameters accepted by :meth:`update`."""
+        return (*super().updatable(), "gain", "margin")
+
+    def _apply_update(self, key: str, value: Any) -> None:
+        if key == "gain":
+            self.gain = as_scalar(value, f"{self.name}.gain", positive=True)
+        elif key == "margin":
+            margin = as_scalar(value, f"{self.name}.margin", nonnegative=True)
+            if self.model is not None and np.any(self._hi - self._lo <= 2.0 * margin):
+                raise InputError(f"{self.name}.margin: {margin} rad leaves no room inside the "
+                                 "limits")
+            self.margin = margin
+        else:
+            super()._apply_update(key, value)

@@ -1,0 +1,132 @@
+"""Payload moment: reduce, or bound, the moment a payload exerts through the arm (paper 003)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from .._validation import FloatArray, as_scalar
+from ..errors import InputError
+from ._common import check_frame
+from .task import Task
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+
+class PayloadMomentTask(Task):
+    r"""Keep the payload moment ``M(q) = (x_E^2 + y_E^2) F`` small.
+
+    ``003_229789978cc4b235.txt, Eq. (20)``: ``(x_E, y_E)`` is the position of ``frame`` in the
+    arm-base frame [m], ``F`` the (vertical) payload force [N]; ``M`` is in [N m^2] as in the
+    paper (the squared lever arm times the force; it grows with the moment the payload exerts
+    on the vehicle). Gradient (Eq. (21)):
+    ``dM/dq_i = 2 F (x_E dx_E/dq_i + y_E dy_E/dq_i)`` [N m^2/rad], with the position rows of the
+    arm Jacobian in arm-base axes. Modes:
+
+    * ``"reduce"``: rows ``qdot = -lambda grad M`` over the arm joint rates (gradient projection,
+      Eq. (22)-(23) with the minus sign of the attitude objective; ``normalize=True`` divides by
+      ``|grad M|`` as in Eq. (11)). With ``F = 0`` the rows ask for no arm motion.
+    * ``"bound"``: one inequality ``grad M . qdot <= gain (maximum - M)`` [N m^2/s], the
+      first-order barrier keeping ``M <= maximum``.
+
+    ``F`` changes at run time with ``update(force=...)`` (a payload picked up mid-run).
+
+    Args:
+        mode: ``"reduce"`` or ``"bound"``.
+        force: Payload force ``F`` [N] (>= 0; 0 means no payload).
+        frame: Frame carrying the payload (default ``"tool"``).
+        gain: ``lambda`` [rad/s per N m^2] (reduce) or the barrier gain [1/s] (bound).
+        maximum: Bound on ``M`` [N m^2] (mode ``"bound"``).
+        normalize: Normalise the gradient (mode ``"reduce"``).
+        weight: Weight within the level.
+        name: Task name (default ``"payload_moment"``).
+    """
+
+    type_name = "payload_moment"
+    error_unit = "N m^2"
+    rate_unit = "rad/s | N m^2/s"
+
+    def __init__(
+        self,
+        *,
+        mode: Literal["reduce", "bound"] = "reduce",
+        force: float = 0.0,
+        frame: str = "tool",
+        gain: float = 1.0,
+        maximum: float | None = None,
+        normalize: bool = False,
+        weight: float = 1.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(name=name, weight=weight)
+        if mode not in ("reduce", "bound"):
+            raise InputError(f"{self.name}.mode: expected 'reduce' or 'bound', got {mode!r}")
+        if not isinstance(frame, str) or not frame:
+            raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
+        if not isinstance(normalize, bool):
+            raise InputError(f"{self.name}.normalize: expected true or false")
+        self.mode = mode
+        self.frame = frame
+        self.force = as_scalar(force, f"{self.name}.force", nonnegative=True)
+        self.gain = as_scalar(gain, f"{self.name}.gain", positive=True)
+        self.maximum = None if maximum is None else as_scalar(maximum, f"{self.name}.maximum",
+                                                              nonnegative=True)
+        if mode == "bound" and self.maximum is None:
+            raise InputError(f"{self.name}.maximum: required in mode 'bound'")
+        self.normalize = normalize
+        self._nvh = 0
+        self.value = float("nan")
+
+    def _bind(self, model: Model) -> int:
+        check_frame(model, self.frame, f"{self.name}.frame")
+        if model.n_joints == 0:
+            raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
+        self._nvh = model.n_vehicle
+        return 1 if self.mode == "bound" else model.n_joints
+
+    def compute_value(self, state: State) -> tuple[float, FloatArray]:
+        """``(M, grad M)`` at ``state`` (gradient over the arm joints)."""
+        p = state.pose_in(self.frame, "arm_base")[:3, 3]
+        Jp = state.arm_jacobian(self.frame, rows="position")
+        F = self.force
+        M = (p[0] * p[0] + p[1] * p[1]) * F
+        grad = (2.0 * F) * (p[0] * Jp[0] + p[1] * Jp[1])
+        return float(M), grad
+
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write the reduce rows or the bound row (see the class docstring)."""
+        M, g = self.compute_value(state)
+        self.value = M
+        self._last_error = np.array([M])
+        A[:] = 0.0
+        nvh = self._nvh
+        if self.mode == "bound":
+            A[0, nvh:] = g
+            lower[0] = -np.inf
+            upper[0] = self.gain * (self.maximum - M)  # type: ignore[operator]
+            return
+        n = g.shape[0]
+        A[np.arange(n), nvh + np.arange(n)] = 1.0
+        scale = -self.gain
+        if self.normalize:
+            norm = float(np.sqrt(g @ g))
+            scale = scale / norm if norm > 1e-12 else 0.0
+        np.multiply(scale, g, out=lower)
+        upper[:] = lower
+
+    def updatable(self) -> tuple[str, ...]:
+        """Parameters accepted by :meth:`update`."""
+        return (*super().updatable(), "force", "gain", "maximum")
+
+    def _apply_update(self, key: str, value: Any) -> None:
+        if key == "force":
+            self.force = as_scalar(value, f"{self.name}.force", nonnegative=True)
+        elif key == "gain":
+            self.gain = as_scalar(value, f"{self.name}.gain", positive=True)
+        elif key == "maximum":
+            self.maximum = as_scalar(value, f"{self.name}.maximum", nonnegative=True)
+        else:
+            super()._apply_update(key, value)

@@ -1,0 +1,102 @@
+"""Arm posture: drive (some) arm joints toward a reference posture."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from .._validation import FloatArray, as_vector
+from ..errors import InputError
+from ._common import check_joint_list, joint_indices
+from .task import ErrorTask
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+
+class PostureTask(ErrorTask):
+    r"""Drive arm joints toward a reference posture ``q_ref`` [rad].
+
+    Rows ``S zeta = K (q_ref - q)_S`` where ``S`` selects the joint-rate columns of zeta of the
+    chosen joints; error [rad], rows [rad/s].
+
+    Args:
+        posture: Reference angles for the selected joints [rad], or None to use ``reference``.
+        reference: When ``posture`` is None: ``"activation"`` (the posture at the first
+            evaluation after construction/reset) or ``"middle"`` (middle of the joint limits).
+        joints: Names of the joints to regulate (default: all arm joints).
+        gain: Gain K [1/s], scalar or per joint.
+        weight: Weight within the level.
+        name: Task name (default ``"posture"``).
+    """
+
+    type_name = "posture"
+    error_unit = "rad"
+    rate_unit = "rad/s"
+
+    def __init__(
+        self,
+        *,
+        posture: list[float] | None = None,
+        reference: Literal["activation", "middle"] = "activation",
+        joints: list[str] | None = None,
+        gain: float | list[float] = 1.0,
+        weight: float = 1.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(name=name, weight=weight, gain=gain)
+        if reference not in ("activation", "middle"):
+            raise InputError(f"{self.name}.reference: expected 'activation' or 'middle', got "
+                             f"{reference!r}")
+        self.reference = reference
+        self.joints = check_joint_list(joints, f"{self.name}.joints")
+        self._posture_arg = None if posture is None else as_vector(posture, f"{self.name}.posture")
+        self._idx = np.zeros(0, dtype=int)
+        self._q_ref: FloatArray | None = None
+        self._A = np.zeros((0, 0))
+
+    def _bind(self, model: Model) -> int:
+        idx = joint_indices(model, self.joints, f"{self.name}.joints")
+        if idx.size == 0:
+            raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
+        if self._posture_arg is not None and self._posture_arg.shape[0] != idx.size:
+            raise InputError(f"{self.name}.posture: expected {idx.size} angles, got "
+                             f"{self._posture_arg.shape[0]}")
+        if self._posture_arg is None and self.reference == "middle":
+            lo, hi = np.asarray(model.joint_lower)[idx], np.asarray(model.joint_upper)[idx]
+            if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+                raise InputError(f"{self.name}: reference='middle' needs finite joint limits")
+            self._posture_arg = 0.5 * (lo + hi)
+        self._idx = idx
+        self._A = np.zeros((idx.size, model.nv))
+        self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
+        self._q_ref = None if self._posture_arg is None else self._posture_arg.copy()
+        return int(idx.size)
+
+    def reset(self) -> None:
+        """Forget the activation posture."""
+        self._q_ref = None if self._posture_arg is None else self._posture_arg.copy()
+
+    def compute_error(self, state: State, t: float) -> FloatArray:
+        """``q_ref - q`` on the selected joints [rad]."""
+        q = state.joints[self._idx]
+        if self._q_ref is None:
+            self._q_ref = q.copy()
+        return self._q_ref - q
+
+    def compute_jacobian(self, state: State, t: float) -> FloatArray:
+        """Selector of the joint-rate columns (constant)."""
+        return self._A
+
+    def updatable(self) -> tuple[str, ...]:
+        """Parameters accepted by :meth:`update`."""
+        return (*super().updatable(), "posture")
+
+    def _apply_update(self, key: str, value: Any) -> None:
+        if key == "posture":
+            n = self._idx.size or None
+            self._posture_arg = as_vector(value, f"{self.name}.posture", n)
+            self._q_ref = self._posture_arg.copy()
+        else:
+            super()._apply_update(key, value)

@@ -1,0 +1,133 @@
+"""Station keeping: hold the vehicle pose (any subset of its coordinates)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from .._validation import FloatArray, as_vector
+from ..errors import InputError
+from ._common import ANGLE_AXES, eta_axes, parse_axes, wrap_angle
+from .task import ErrorTask
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+_ALL = ("x", "y", "z", "phi", "theta", "psi")
+_ACTUATOR = {"phi": "p", "theta": "q"}
+
+
+class StationKeepingTask(ErrorTask):
+    r"""Hold the vehicle pose ``eta`` on selected coordinates at a set point.
+
+    Rows ``J_eta,S zeta = K (eta_d - eta)_S`` over the selected coordinates ``S`` (angles wrapped to
+    ``[-pi, pi)``), with ``J_eta`` the vehicle-pose Jacobian (``eta_dot = J_eta zeta``, NED, Z-Y-X
+    Euler angles). Error [m, rad], rows [m/s, rad/s].
+
+    The set point is ``target`` (values for the selected coordinates, in order), or, when None:
+    ``hold="activation"`` (default) the pose at the first evaluation after construction or
+    :meth:`reset`; ``hold="current"`` the pose at every tick, so the rows ask for zero vehicle
+    motion, as in ``000_7b5f597fe4e36aa4.txt``, Section 3 ("the current URV position value is
+    entered as the desired position values for the next step").
+
+    Args:
+        axes: Coordinates to hold, from ``x, y, z, phi, theta, psi`` (planar ``x, y, psi``);
+            default ``x, y, z, psi`` (planar ``x, y, psi``). Roll/pitch only if actuated.
+        target: Set point for the selected coordinates [m, rad], or None (see ``hold``).
+        hold: ``"activation"`` or ``"current"`` when no target is given.
+        gain: Gain K [1/s], scalar or per coordinate.
+        weight: Weight within the level.
+        name: Task name (default ``"station_keeping"``).
+    """
+
+    type_name = "station_keeping"
+    error_unit = "m, rad"
+    rate_unit = "m/s, rad/s"
+
+    def __init__(
+        self,
+        *,
+        axes: list[str] | None = None,
+        target: list[float] | None = None,
+        hold: Literal["activation", "current"] = "activation",
+        gain: float | list[float] = 1.0,
+        weight: float = 1.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(name=name, weight=weight, gain=gain)
+        self._axes_arg = None if axes is None else parse_axes(axes, _ALL, f"{self.name}.axes")
+        if hold not in ("activation", "current"):
+            raise InputError(f"{self.name}.hold: expected 'activation' or 'current', got {hold!r}")
+        self.hold = hold
+        self._target_arg = None if target is None else as_vector(target, f"{self.name}.target")
+        self.axes: list[str] = []
+        self._idx = np.zeros(0, dtype=int)
+        self._angle = np.zeros(0, dtype=bool)
+        self._target: FloatArray | None = None
+
+    def _bind(self, model: Model) -> int:
+        known = eta_axes(model)
+        if not known:
+            raise InputError(f"{self.name}: model {model.name!r} has a fixed base; station keeping "
+                             "needs a vehicle")
+        if self._axes_arg is None:
+            axes = ["x", "y", "psi"] if model.vehicle_kind == "planar" else ["x", "y", "z", "psi"]
+        else:
+            axes = self._axes_arg
+        for a in axes:
+            if a not in known:
+                raise InputError(f"{self.name}.axes: {a!r} is not a coordinate of the "
+                                 f"{model.vehicle_kind} vehicle; known: {', '.join(known)}")
+            if a in _ACTUATOR and _ACTUATOR[a] not in model.actuated:
+                raise InputError(f"{self.name}.axes: {a!r} is passive on model {model.name!r} "
+                                 f"(actuated: {', '.join(model.actuated)})")
+        if self._target_arg is not None and self._target_arg.shape[0] != len(axes):
+            raise InputError(f"{self.name}.target: expected {len(axes)} values for axes "
+                             f"{axes}, got {self._target_arg.shape[0]}")
+        self.axes = list(axes)
+        self._idx = np.array([known.index(a) for a in axes], dtype=int)
+        self._angle = np.array([a in ANGLE_AXES for a in axes], dtype=bool)
+        self._target = None if self._target_arg is None else self._target_arg.copy()
+        return len(axes)
+
+    def reset(self) -> None:
+        """Forget the activation pose (a new one is taken at the next evaluation)."""
+        self._target = None if self._target_arg is None else self._target_arg.copy()
+
+    def set_target(self, target: Any) -> None:
+        """Set the held values for the selected coordinates [m, rad]."""
+        value = as_vector(target, f"{self.name}.target", len(self.axes) or None)
+        self._target_arg = value
+        self._target = value.copy()
+
+    @property
+    def held_pose(self) -> FloatArray | None:
+        """The current set point on the selected coordinates, or None before activation."""
+        return self._target
+
+    def compute_error(self, state: State, t: float) -> FloatArray:
+        """``(eta_d - eta)`` on the selected coordinates, angles wrapped [m, rad]."""
+        eta = state.eta[self._idx]
+        if self._target is None:
+            if self.hold == "current":
+                return np.zeros(self._idx.shape[0])
+            self._target = eta.copy()
+        e = self._target - eta
+        if self._angle.any():
+            e[self._angle] = wrap_angle(e[self._angle])
+        return e
+
+    def compute_jacobian(self, state: State, t: float) -> FloatArray:
+        """Rows of the vehicle-pose Jacobian ``J_eta`` for the selected coordinates."""
+        return state.vehicle_pose_jacobian()[self._idx]
+
+    def updatable(self) -> tuple[str, ...]:
+        """Parameters accepted by :meth:`update`."""
+        return (*super().updatable(), "target")
+
+    def _apply_update(self, key: str, value: Any) -> None:
+        if key == "target":
+            self.set_target(value)
+        else:
+            super()._apply_update(key, value)

@@ -1,0 +1,127 @@
+"""Vehicle motion minimisation with the motion distribution of paper 003."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._validation import FloatArray, as_scalar
+from ..errors import InputError
+from .task import Task
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+
+def motion_distribution_weights(model: Any, beta: float = 0.5, w_max: float = 1.0) -> FloatArray:
+    r"""Diagonal metric ``W`` (nv,) of the motion distribution of ``003_229789978cc4b235.txt``.
+
+    Eq. (14) gives the inverse weights ``w^{-1} = diag((1 - beta) w_max I_v, beta I_n)``, so
+    ``W = diag(1 / ((1 - beta) w_max) I_v, 1 / beta I_n)``: a large ``beta`` makes vehicle motion
+    expensive (the arm does the work). Usable as ``Controller(..., metric=W)``.
+
+    Args:
+        model: Model (gives ``n_vehicle`` and ``nv``).
+        beta: Motion distribution factor, strictly between 0 and 1.
+        w_max: Maximum vehicle weight factor, ``0 < w_max <= 1``.
+    """
+    beta = as_scalar(beta, "beta")
+    w_max = as_scalar(w_max, "w_max", positive=True)
+    if not 0.0 < beta < 1.0:
+        raise InputError(f"beta: expected 0 < beta < 1, got {beta} (use hard vehicle rate bounds "
+                         "of zero to forbid vehicle motion)")
+    if w_max > 1.0:
+        raise InputError(f"w_max: expected 0 < w_max <= 1, got {w_max}")
+    W = np.full(model.nv, 1.0 / beta)
+    W[: model.n_vehicle] = 1.0 / ((1.0 - beta) * w_max)
+    return W
+
+
+class VehicleMotionTask(Task):
+    r"""Minimise vehicle motion, weighted by the motion distribution of paper 003.
+
+    Rows ``zeta_i = 0`` with per-row weights from ``003_229789978cc4b235.txt, Eq. (14)``: vehicle
+    rows weigh ``1 / ((1 - beta) w_max)``, arm rows ``1 / beta`` (the level then minimises
+    ``zeta' W zeta``, the metric of the paper's weighted pseudoinverse, Eq. (12)-(13)). With
+    ``include_arm=False`` only the vehicle rows are emitted (all weight 1). Rows [m/s, rad/s].
+
+    Args:
+        beta: Motion distribution factor, ``0 < beta < 1`` (larger: arm preferred).
+        w_max: Maximum vehicle weight factor, ``0 < w_max <= 1``.
+        include_arm: Also emit the arm joint-rate rows.
+        weight: Weight within the level.
+        name: Task name (default ``"vehicle_motion"``).
+    """
+
+    type_name = "vehicle_motion"
+    error_unit = "m/s, rad/s"
+    rate_unit = "m/s, rad/s"
+
+    def __init__(
+        self,
+        *,
+        beta: float = 0.5,
+        w_max: float = 1.0,
+        include_arm: bool = True,
+        weight: float = 1.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(name=name, weight=weight)
+        if not isinstance(include_arm, bool):
+            raise InputError(f"{self.name}.include_arm: expected true or false")
+        self.beta = as_scalar(beta, f"{self.name}.beta")
+        self.w_max = as_scalar(w_max, f"{self.name}.w_max", positive=True)
+        self.include_arm = include_arm
+
+        class _Probe:  # validate beta / w_max now, not at bind
+            nv, n_vehicle = 1, 1
+
+        try:
+            motion_distribution_weights(_Probe, self.beta, self.w_max)
+        except InputError as exc:
+            raise InputError(f"{self.name}.{exc}") from None
+        self._A = np.zeros((0, 0))
+        self._zero = np.zeros(0)
+
+    def _bind(self, model: Model) -> int:
+        if model.n_vehicle == 0:
+            raise InputError(f"{self.name}: model {model.name!r} has no actuated vehicle DOF")
+        m = model.nv if self.include_arm else model.n_vehicle
+        self._A = np.eye(m, model.nv)
+        self._zero = np.zeros(m)
+        return m
+
+    def _update_row_weights(self) -> None:
+        model = self.model
+        if model is None:
+            return
+        if self.include_arm:
+            self._row_weights = self.weight * motion_distribution_weights(model, self.beta,
+                                                                          self.w_max)
+
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write ``zeta_i = 0`` on the vehicle (and arm) rows."""
+        A[:] = self._A
+        lower[:] = 0.0
+        upper[:] = 0.0
+        self._last_error = None
+
+    def updatable(self) -> tuple[str, ...]:
+        """Parameters accepted by :meth:`update`."""
+        return (*super().updatable(), "beta", "w_max")
+
+    def _apply_update(self, key: str, value: Any) -> None:
+        if key in ("beta", "w_max"):
+            beta = value if key == "beta" else self.beta
+            w_max = value if key == "w_max" else self.w_max
+
+            class _Probe:
+                nv, n_vehicle = 1, 1
+
+            motion_distribution_weights(_Probe, beta, w_max)
+            self.beta, self.w_max = float(beta), float(w_max)
+            self._update_row_weights()
+        else:
+            super()._apply_update(key, value)
