@@ -1,0 +1,27 @@
+"""Hard constraints: box bounds and inequality rows on zeta that hold at every level.
+
+``CONSTRAINT_TYPES`` maps the scenario ``type`` strings to the constraint classes.
+"""
+
+from __future__ import annotations
+
+from .constraint import Constraint
+from .joint_position_bounds import JointPositionBounds
+from .joint_velocity_bounds import JointVelocityBounds
+from .linear_inequality import LinearInequality
+from .vehicle_rate_bounds import VehicleRateBounds
+
+CONSTRAINT_TYPES: dict[str, type[Constraint]] = {
+    cls.type_name: cls
+    for cls in (JointPositionBounds, JointVelocityBounds, VehicleRateBounds, LinearInequality)
+}
+"""Scenario ``type`` string -> constraint class."""
+
+__all__ = [
+    "CONSTRAINT_TYPES",
+    "Constraint",
+    "JointPositionBounds",
+    "JointVelocityBounds",
+    "LinearInequality",
+    "VehicleRateBounds",
+]
