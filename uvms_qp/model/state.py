@@ -1,0 +1,230 @@
+"""Kinematic state of a model at one configuration: poses and Jacobians over ``zeta``.
+
+Construction runs Pinocchio's forward kinematics, joint Jacobians and frame placements once
+(``computeJointJacobians`` + ``updateFramePlacements``); every getter after that is a cheap
+read, cached per frame. Returned arrays are read-only views of the cache: copy before modifying.
+
+The model's single Pinocchio ``Data`` buffer holds the kinematics of the most recent state; an
+older state that needs a frame not yet in its cache recomputes its own kinematics first, so
+states never read each other's numbers.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from ..errors import UnknownNameError
+
+if TYPE_CHECKING:
+    from .model import Model
+
+FloatArray = NDArray[np.float64]
+
+_ROWS: dict[str, slice] = {
+    "twist": slice(0, 6),
+    "position": slice(0, 3),
+    "orientation": slice(3, 6),
+}
+_AXES: dict[str, Any] = {
+    "world": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+    "local": pin.ReferenceFrame.LOCAL,
+}
+
+
+def _rows(rows: str) -> slice:
+    try:
+        return _ROWS[rows]
+    except (KeyError, TypeError):
+        raise UnknownNameError("rows", rows, _ROWS) from None
+
+
+class State:
+    """Configuration ``q`` of a model with its kinematics.
+
+    Attributes:
+        model: The :class:`~uvms_qp.model.model.Model`.
+        q: Configuration (read-only, length ``model.nq``).
+
+    Twists are ``[v; omega]``: ``v`` the velocity of the frame origin [m/s], ``omega`` the
+    angular velocity [rad/s]. Jacobians map ``zeta`` (length ``model.nv``) to twists, in world
+    (NED) axes or in the frame's own axes.
+    """
+
+    __slots__ = ("_arm", "_eta", "_jacobians", "_poses", "model", "q")
+
+    def __init__(self, model: Model, q: Any) -> None:
+        """Validate ``q`` and compute the kinematics (see :meth:`Model.check_configuration`)."""
+        q = model.check_configuration(q)
+        q.flags.writeable = False
+        self.model = model
+        self.q: FloatArray = q
+        self._poses: dict[str, FloatArray] = {}
+        self._jacobians: dict[tuple[str, str], FloatArray] = {}
+        self._arm: dict[str, FloatArray] = {}
+        self._eta: FloatArray | None = None
+        pin.computeJointJacobians(model.pin_model, model._data, q)
+        pin.updateFramePlacements(model.pin_model, model._data)
+        model._owner = self
+
+    def _sync(self) -> Any:
+        """Return the model's Data holding this state's kinematics (recompute if taken)."""
+        model = self.model
+        if model._owner is not self:
+            pin.computeJointJacobians(model.pin_model, model._data, self.q)
+            pin.updateFramePlacements(model.pin_model, model._data)
+            model._owner = self
+        return model._data
+
+    # --- configuration --------------------------------------------------------------------
+
+    @property
+    def eta(self) -> FloatArray:
+        """Vehicle pose ``[x, y, z, phi, theta, psi]`` / ``[x, y, psi]`` / ``[]`` [m, rad]."""
+        if self._eta is None:
+            m = self.model
+            eta = m.vehicle.eta_from_q(self.q[: m.nq_vehicle])
+            eta.flags.writeable = False
+            self._eta = eta
+        return self._eta
+
+    @property
+    def joints(self) -> FloatArray:
+        """Joint angles [rad] (read-only view of ``q``)."""
+        return self.q[self.model.nq_vehicle :]
+
+    # --- poses --------------------------------------------------------------------
+
+    def pose(self, frame: str) -> FloatArray:
+        """Pose ``T_world_frame`` (4x4, read-only) [m].
+
+        Raises:
+            UnknownFrameError: unknown frame (the message lists the known frames).
+        """
+        T = self._poses.get(frame)
+        if T is None:
+            fid = self.model.frame_id(frame)
+            T = self._sync().oMf[fid].homogeneous
+            T.flags.writeable = False
+            self._poses[frame] = T
+        return T
+
+    def position(self, frame: str) -> FloatArray:
+        """Origin of ``frame`` in world coordinates (3,) [m]."""
+        return self.pose(frame)[:3, 3]
+
+    def rotation(self, frame: str) -> FloatArray:
+        """Rotation ``R_world_frame`` (3x3)."""
+        return self.pose(frame)[:3, :3]
+
+    def pose_in(self, frame: str, reference: str) -> FloatArray:
+        """Pose ``T_reference_frame`` (4x4) of ``frame`` in the axes of ``reference``."""
+        T_wr = self.pose(reference)
+        T_wf = self.pose(frame)
+        R_rw = T_wr[:3, :3].T
+        out = np.eye(4)
+        out[:3, :3] = R_rw @ T_wf[:3, :3]
+        out[:3, 3] = R_rw @ (T_wf[:3, 3] - T_wr[:3, 3])
+        return out
+
+    # --- Jacobians --------------------------------------------------------------------
+
+    def jacobian(self, frame: str, rows: str = "twist", axes: str = "world") -> FloatArray:
+        """Jacobian of a frame's twist over ``zeta`` (read-only).
+
+        ``[v; omega] = J @ zeta`` with ``v`` the velocity of the frame origin [m/s] and
+        ``omega`` the angular velocity [rad/s], both in world axes (``axes="world"``) or in the
+        frame's axes (``axes="local"``). Passive vehicle DOFs contribute no column.
+
+        Args:
+            frame: Frame name.
+            rows: ``"twist"`` (6 rows), ``"position"`` (first 3) or ``"orientation"`` (last 3).
+            axes: ``"world"`` or ``"local"``.
+
+        Returns:
+            ``(6 or 3, model.nv)`` array.
+
+        Raises:
+            UnknownFrameError: unknown frame.
+            UnknownNameError: unknown ``rows`` or ``axes``.
+        """
+        J = self._jacobians.get((frame, axes))
+        if J is None:
+            J = self._frame_jacobian(frame, axes)
+        if rows == "twist":
+            return J
+        return J[_rows(rows)]
+
+    def _frame_jacobian(self, frame: str, axes: str) -> FloatArray:
+        try:
+            reference = _AXES[axes]
+        except (KeyError, TypeError):
+            raise UnknownNameError("axes", axes, _AXES) from None
+        model = self.model
+        fid = model.frame_id(frame)
+        J = pin.getFrameJacobian(model.pin_model, self._sync(), fid, reference)
+        if model._select is not None:
+            J = J[:, model._select]
+        J.flags.writeable = False
+        self._jacobians[(frame, axes)] = J
+        return J
+
+    def arm_jacobian(self, frame: str = "tool", rows: str = "twist") -> FloatArray:
+        """Jacobian of a frame's twist over the joint rates only, in ``arm_base`` axes.
+
+        The vehicle is held still: ``[v; omega]_arm_base = J_arm @ joint_rates``, with ``v`` the
+        velocity of the frame origin. Used for the arm's manipulability
+        (``000_7b5f597fe4e36aa4.txt``, Eq. (18); ``003_229789978cc4b235.txt``, Eq. (18)).
+
+        Args:
+            frame: Frame name (default ``"tool"``).
+            rows: ``"twist"``, ``"position"`` or ``"orientation"``.
+
+        Returns:
+            ``(6 or 3, model.n_joints)`` read-only array.
+        """
+        Ja = self._arm.get(frame)
+        if Ja is None:
+            Ja = self._arm_jacobian(frame)
+        if rows == "twist":
+            return Ja
+        return Ja[_rows(rows)]
+
+    def _arm_jacobian(self, frame: str) -> FloatArray:
+        m = self.model
+        fid = m._arm_frame_ids.get(frame)
+        if fid is None:
+            m.frame_id(frame)  # raises UnknownFrameError for an unknown name
+            Ja = np.zeros((6, m.n_joints))  # a frame the arm does not move
+        else:
+            # Jacobian of the bare fixed-base arm (world = arm_base), over the joint rates
+            arm, data = m._arm_model, m._arm_data
+            if m._arm_owner is not self:
+                pin.computeJointJacobians(arm, data, self.q[m.nq_vehicle :])
+                m._arm_owner = self
+            Ja = pin.getFrameJacobian(arm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        Ja.flags.writeable = False
+        self._arm[frame] = Ja
+        return Ja
+
+    def vehicle_pose_jacobian(self) -> FloatArray:
+        """Matrix ``J_eta`` with ``eta_dot = J_eta @ zeta`` (passive rates taken as zero).
+
+        Spatial: Fossen's transformation (``003_229789978cc4b235.txt``, Eq. (2)-(3)) restricted
+        to the actuated columns; planar ``[R2(psi), 0; 0, 1]``; joint columns are zero.
+
+        Returns:
+            ``(model.eta_size, model.nv)`` array (a new array).
+        """
+        m = self.model
+        out = np.zeros((m.eta_size, m.nv))
+        if m.eta_size:
+            full = m.vehicle.pose_jacobian(self.eta)
+            out[:, : m.n_vehicle] = full[:, list(m.vehicle.actuated_indices)]
+        return out
+
+    def __repr__(self) -> str:
+        return f"<State of {self.model.name!r} q={np.array2string(self.q, precision=4)}>"

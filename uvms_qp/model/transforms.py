@@ -1,0 +1,111 @@
+"""Rigid transforms used to describe mounts and tool offsets.
+
+A transform is a 4x4 homogeneous matrix ``T_a_b`` (pose of frame ``b`` in frame ``a``). Rotations
+from roll-pitch-yaw use the Z-Y-X Euler convention of Fossen and SNAME (and of URDF):
+``R = Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from .._validation import as_matrix, as_vector
+from ..errors import InputError
+
+FloatArray = NDArray[np.float64]
+
+#: Rotation from ROS body axes FLU (forward, left, up) to marine body axes FRD (forward, right,
+#: down): a half turn about the forward axis, ``R_FRD_FLU = diag(1, -1, -1)`` (its own inverse).
+R_FRD_FLU: FloatArray = np.diag([1.0, -1.0, -1.0])
+
+
+def rpy_to_matrix(rpy: Any) -> FloatArray:
+    """Rotation matrix of roll-pitch-yaw angles ``[phi, theta, psi]`` [rad], Z-Y-X convention."""
+    r = as_vector(rpy, "rpy", 3)
+    return np.asarray(pin.rpy.rpyToMatrix(r[0], r[1], r[2]), dtype=np.float64)
+
+
+def matrix_to_rpy(rotation: FloatArray) -> FloatArray:
+    """Roll-pitch-yaw ``[phi, theta, psi]`` [rad] of a rotation matrix (Z-Y-X convention).
+
+    Pitch is returned in ``[-pi/2, pi/2]``, roll and yaw in ``[-pi, pi]``.
+    """
+    return np.asarray(pin.rpy.matrixToRpy(np.asarray(rotation, dtype=np.float64)))
+
+
+def transform(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> FloatArray:
+    """Homogeneous transform from a translation [m] and roll-pitch-yaw angles [rad].
+
+    Args:
+        xyz: Origin of the child frame in the parent frame [m].
+        rpy: Orientation of the child frame, Z-Y-X Euler angles [rad].
+
+    Returns:
+        The 4x4 matrix ``[[R, xyz], [0, 1]]``.
+    """
+    T = np.eye(4)
+    T[:3, :3] = rpy_to_matrix(rpy)
+    T[:3, 3] = as_vector(xyz, "xyz", 3)
+    return T
+
+
+def flu_to_frd(T_flu_child: Any) -> FloatArray:
+    """Re-express a pose given in a ROS FLU body frame in the marine FRD body frame.
+
+    Both body frames share their origin; only the axes differ, so
+    ``T_frd_child = [[R_FRD_FLU, 0], [0, 1]] @ T_flu_child``: the position flips sign in y and z
+    and the child's orientation gains a half turn about the forward axis. The child keeps its own
+    axes (a ROS arm keeps its URDF frames).
+
+    Args:
+        T_flu_child: 4x4 pose of a child frame in the FLU body frame.
+
+    Returns:
+        The 4x4 pose of the same child frame in the FRD body frame.
+    """
+    T = as_transform(T_flu_child, "T_flu_child")
+    out = T.copy()
+    out[:3, :] = R_FRD_FLU @ T[:3, :]
+    return out
+
+
+def as_transform(value: Any, name: str) -> FloatArray:
+    """Validate a rigid transform given as a 4x4 matrix, a mapping or None.
+
+    Args:
+        value: None (identity), a 4x4 homogeneous matrix with an orthonormal rotation, or a mapping
+            with optional keys ``"xyz"`` [m] and ``"rpy"`` [rad].
+        name: Argument name used in error messages.
+
+    Returns:
+        A new 4x4 float64 array.
+
+    Raises:
+        InputError: not a rigid transform (bad bottom row, non-orthonormal rotation, unknown keys).
+        ShapeError: wrong shape.
+        NonFiniteError: NaN or inf entries.
+    """
+    if value is None:
+        return np.eye(4)
+    if isinstance(value, Mapping):
+        unknown = sorted(set(value) - {"xyz", "rpy"})
+        if unknown:
+            raise InputError(f"{name}: unknown keys {unknown}; expected 'xyz' and/or 'rpy'")
+        return transform(value.get("xyz", (0.0, 0.0, 0.0)), value.get("rpy", (0.0, 0.0, 0.0)))
+    T = as_matrix(value, name, 4, 4).copy()
+    if not np.allclose(T[3], (0.0, 0.0, 0.0, 1.0)):
+        raise InputError(f"{name}: bottom row must be [0, 0, 0, 1], got {T[3].tolist()}")
+    R = T[:3, :3]
+    if not np.allclose(R.T @ R, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0.0:
+        raise InputError(f"{name}: the 3x3 block is not a rotation matrix")
+    return T
+
+
+def to_se3(T: FloatArray) -> pin.SE3:
+    """Pinocchio ``SE3`` of a 4x4 homogeneous matrix (no validation)."""
+    return pin.SE3(np.ascontiguousarray(T[:3, :3]), np.ascontiguousarray(T[:3, 3]))
