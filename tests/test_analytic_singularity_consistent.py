@@ -1,0 +1,132 @@
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from uvms_qp.analytic import (
+    column_augmented_jacobian,
+    end_point_field,
+    sc_arm_jacobian,
+    sc_arm_position,
+    sc_blend,
+    sc_vector_field,
+    self_motion_field,
+    shoulder_term,
+    signed_minor_null_vector,
+)
+from uvms_qp.errors import InputError, ShapeError
+
+angles = st.lists(st.floats(-3.1, 3.1), min_size=4, max_size=4).map(np.array)
+units = (
+    st.lists(st.floats(-1, 1), min_size=3, max_size=3)
+    .map(np.array)
+    .filter(lambda v: np.linalg.norm(v) > 0.1)
+)
+
+
+@given(st.integers(0, 10_000), st.integers(1, 6))
+def test_signed_minor_vector_is_the_svd_null_direction(seed, m):
+    H = np.random.default_rng(seed).normal(size=(m, m + 1))
+    f = signed_minor_null_vector(H)
+    assert np.allclose(H @ f, 0.0, atol=1e-9 * max(1.0, np.linalg.norm(f)))
+    v = np.linalg.svd(H)[2][-1]
+    assert np.isclose(abs(f @ v), np.linalg.norm(f), rtol=1e-8)  # parallel
+    # its norm is the product of the singular values
+    assert np.isclose(np.linalg.norm(f), np.prod(np.linalg.svd(H, compute_uv=False)))
+
+
+def test_sc_field_of_two_link_arm_stops_the_end_point_at_singularity():
+    # 2-link arm, unit links, q2 -> 0 (stretched): dp = (-1)^n det J = det J = sin q2
+    for q2 in (0.5, 0.0):
+        s1, c1 = np.sin(0.3), np.cos(0.3)
+        s12, c12 = np.sin(0.3 + q2), np.cos(0.3 + q2)
+        J = np.array([[-s1 - s12, -s12], [c1 + c12, c12]])
+        f = sc_vector_field(J, [1.0, 0.0])
+        assert np.isclose(f[-1], np.sin(q2))
+        assert np.allclose(column_augmented_jacobian(J, [2.0, 0.0]) @ f, 0.0)
+    assert abs(f[0]) + abs(f[1]) > 0  # joints still move at the singularity
+
+
+@given(angles)
+def test_arm_jacobian_matches_finite_differences_of_position(q):
+    h = 1e-6
+    fd = np.stack(
+        [(sc_arm_position(q + h * e) - sc_arm_position(q - h * e)) / (2 * h) for e in np.eye(4)],
+        axis=1,
+    )
+    assert np.allclose(sc_arm_jacobian(q), fd, atol=1e-7)
+
+
+def test_paper_initial_wrist_positions():
+    assert np.allclose(sc_arm_position(np.deg2rad([0, 0, 0, -90])), [1, 0, 1], atol=1e-12)
+    assert np.isclose(np.linalg.norm(sc_arm_position(np.deg2rad([0, 0, 60, -90]))), np.sqrt(2))
+
+
+@given(angles, units)
+def test_fields_lie_in_kernel_and_have_paper_zero_components(q, v):
+    if abs(shoulder_term(q)) < 1e-3:
+        return
+    H = column_augmented_jacobian(sc_arm_jacobian(q), v)
+    fsm = self_motion_field(q)
+    fep = end_point_field(q, v)
+    scale = max(1.0, np.abs(fsm).max(), np.abs(fep).max())
+    assert np.allclose(H @ fsm, 0.0, atol=1e-9 * scale)
+    assert np.allclose(H @ fep, 0.0, atol=1e-9 * scale)
+    assert fsm[3] == 0.0 and fsm[4] == 0.0  # no q4 rate, no end-point motion
+    assert fep[2] == 0.0  # arm-plane angle kept
+    assert np.isclose(fep[4], np.sin(q[3]))  # paper: fifth component S4
+    # the printed closed form of f_sm
+    c = shoulder_term(q)
+    s2, s3, s4, c3 = np.sin(q[1]), np.sin(q[2]), np.sin(q[3]), np.cos(q[2])
+    assert np.allclose(fsm, [-c3 * s4**2 / c, s2 * s3 * s4**2 / c, s4, 0.0, 0.0], atol=1e-9 * scale)
+
+
+@given(angles, units)
+def test_minors_scale_is_d3_d5_c_times_paper_scale(q, v):
+    if abs(shoulder_term(q, 1.0, 0.7)) < 1e-3:
+        return
+    c = shoulder_term(q, 1.0, 0.7)
+    for paper, minors in (
+        (self_motion_field(q, 1.0, 0.7), self_motion_field(q, 1.0, 0.7, "minors")),
+        (end_point_field(q, v, 1.0, 0.7), end_point_field(q, v, 1.0, 0.7, "minors")),
+    ):
+        assert np.allclose(minors, 0.7 * c * paper, atol=1e-9)
+
+
+def test_raw_det_of_first_three_columns_is_identically_zero():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        J = sc_arm_jacobian(rng.uniform(-3, 3, 4), 1.0, 0.8)
+        assert abs(np.linalg.det(J[:, :3])) < 1e-12
+
+
+def test_fields_at_extended_arm_singularity():
+    q = np.array([0.3, 0.4, 0.5, 0.0])  # extended arm: S4 = 0
+    assert np.allclose(self_motion_field(q), 0.0)
+    fep = end_point_field(q, [1.0, 0.0, 0.0])
+    assert fep[4] == 0.0 and np.abs(fep[:4]).max() > 0  # end point at rest, joints move
+
+
+def test_blend_and_minors_scale_at_shoulder_singularity():
+    q = np.deg2rad([0, 0, 60, -90])
+    v = [1.0, 0.0, 0.0]
+    both = sc_blend(q, v, 1.0, 1.0)
+    assert np.allclose(both, self_motion_field(q) + end_point_field(q, v))
+    assert np.allclose(column_augmented_jacobian(sc_arm_jacobian(q), v) @ both, 0.0)
+    q_sh = np.array([0.0, 0.0, 0.0, 0.0])  # wrist on the Z axis: c = 0
+    with pytest.raises(InputError, match="shoulder"):
+        end_point_field(q_sh, v)
+    assert np.isfinite(end_point_field(q_sh, v, scale="minors")).all()
+
+
+def test_sc_validation():
+    with pytest.raises(ShapeError, match="H"):
+        signed_minor_null_vector(np.ones((2, 2)))
+    with pytest.raises(InputError, match="direction"):
+        column_augmented_jacobian(np.eye(2), [0.0, 0.0])
+    with pytest.raises(ShapeError, match="q"):
+        sc_arm_jacobian([0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match="scale"):
+        self_motion_field([0.1, 0.2, 0.3, 0.4], scale="bogus")
+    with pytest.raises(InputError, match="d3"):
+        sc_arm_position([0, 0, 0, 0], d3=-1.0)
