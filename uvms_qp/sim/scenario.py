@@ -62,6 +62,15 @@ class Event:
     path: str = ""
 
 
+@dataclass(frozen=True)
+class Phase:
+    """A named time window [s] whose metrics are reported separately in ``results.json``."""
+
+    name: str
+    start: float
+    end: float
+
+
 @dataclass
 class Scenario:
     """A fully validated, ready-to-run scenario.
@@ -86,6 +95,7 @@ class Scenario:
         integrator: The configured :class:`~uvms_qp.sim.integrators.Integrator`.
         schemes: Schemes to compare (``"hqp"`` always first).
         tracking: Name of the task whose target is the tool reference in the metrics, or None.
+        phases: Named time windows with their own metrics.
         source: File the scenario came from, when any.
     """
 
@@ -105,6 +115,7 @@ class Scenario:
     integrator: Integrator
     schemes: list[str]
     tracking: str | None = None
+    phases: list[Phase] = field(default_factory=list)
     source: Path | None = None
     data: dict[str, Any] = field(default_factory=dict, repr=False)
 
@@ -370,13 +381,16 @@ def _build_events(
             )
         task, task_table = tasks[name]
         cls = type(task)
-        parameters = keyword_parameters(cls)
+        updatable = getattr(task, "updatable", None)
+        allowed = (
+            tuple(updatable()) if callable(updatable) else tuple(keyword_parameters(cls))
+        )
         hints = parameter_hints(cls)
         update: dict[str, Any] = {}
         for key, value in update_table.data.items():
             path = update_table.at(key)
-            if key not in parameters or key == "name":
-                known = ", ".join(p for p in parameters if p != "name")
+            if key not in allowed or key == "name":
+                known = ", ".join(p for p in allowed if p != "name")
                 raise ConfigError(
                     f"unknown parameter {key!r} of task {name!r}; known parameters: {known}", path
                 )
@@ -403,6 +417,21 @@ def _dry_run_update(
         method(**update)
     except (UvmsQpError, ValueError, TypeError) as exc:
         raise config_error_from(exc, path, list(update), update) from exc
+
+
+def _build_phases(top: Table, duration: float) -> list[Phase]:
+    phases: list[Phase] = []
+    for table in top.take_tables("phases"):
+        name = str(table.take_str("name", required=True))
+        start = float(table.take_number("start", required=True, minimum=0.0) or 0.0)
+        end = float(table.take_number("end", required=True, maximum=duration) or 0.0)
+        table.finish()
+        if not end > start:
+            raise ConfigError(f"expected end > start ({end:g} <= {start:g})", table.at("end"))
+        if any(p.name == name for p in phases):
+            raise ConfigError(f"duplicate phase name {name!r}", table.at("name"))
+        phases.append(Phase(name, start, end))
+    return phases
 
 
 def _check_solver(table: Table) -> str:
@@ -505,6 +534,7 @@ def scenario_from_dict(
     levels, tasks = _build_levels(top, model, task_types, resolver)
     events = _build_events(top, duration, tasks, resolver)
     tracking = _tracking_task(top, tasks)
+    phases = _build_phases(top, duration)
     top.finish()
 
     from ..stack import Level, Stack
@@ -530,6 +560,7 @@ def scenario_from_dict(
         integrator=integrator,
         schemes=schemes,
         tracking=tracking,
+        phases=phases,
         source=source,
         data=data,
     )

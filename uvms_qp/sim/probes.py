@@ -1,0 +1,119 @@
+"""Quantities recorded at every simulated state, measured independently of the controller.
+
+- Manipulability: the measure of the stack's manipulability task (``task.compute_value(state)``,
+  same frame and rows), otherwise Yoshikawa's measure of the arm's position Jacobian in the
+  arm-base frame, ``w = sqrt(det(J J^T))`` (``000_7b5f597fe4e36aa4.txt, Eq. (18)``).
+- Payload moment: ``M = (x_E^2 + y_E^2) F`` with ``(x_E, y_E)`` the tool position in the arm-base
+  frame [m] and ``F`` the payload force [N] currently set on the payload task
+  (``003_229789978cc4b235.txt, Eq. (20)``; [N m^2] as in the paper), through the task's
+  ``compute_value(state)``.
+- Tool tracking: the tracked task's frame pose and its target (``task.target(t)``).
+- Heading: the target heading of a current-alignment task (``heading + offset``), else the
+  scenario current's direction.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._validation import FloatArray
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .scenario import Scenario
+
+
+def yoshikawa(J: FloatArray) -> float:
+    """Yoshikawa's manipulability ``sqrt(det(J J^T))`` of a (k, n) Jacobian (k <= n)."""
+    value = float(np.linalg.det(J @ J.T))
+    return float(np.sqrt(max(value, 0.0)))
+
+
+def _has_value(type_name: str) -> Any:
+    def predicate(task: Any) -> bool:
+        return getattr(task, "type_name", "") == type_name and callable(
+            getattr(task, "compute_value", None)
+        )
+
+    return predicate
+
+
+def _find_task(scenario: Scenario, predicate: Any) -> Any:
+    for task in scenario.tasks():
+        if predicate(task):
+            return task
+    return None
+
+
+class Probes:
+    """Record per-state quantities into preallocated arrays.
+
+    Args:
+        scenario: The scenario being run.
+        size: Number of states to record (steps + 1).
+    """
+
+    def __init__(self, scenario: Scenario, size: int) -> None:
+        model = scenario.model
+        self.model = model
+        self.tracked = scenario.task(scenario.tracking) if scenario.tracking else None
+        self.frame = str(getattr(self.tracked, "frame", "tool")) if self.tracked else "tool"
+        self.manipulability_task = _find_task(scenario, _has_value("manipulability"))
+        self.payload_task = _find_task(scenario, _has_value("payload_moment"))
+        alignment = _find_task(
+            scenario, lambda t: getattr(t, "type_name", "") == "current_alignment"
+        )
+        heading: float | None = None
+        if alignment is not None and getattr(alignment, "heading", None) is not None:
+            heading = float(alignment.heading) + float(getattr(alignment, "offset", 0.0))
+        elif scenario.current is not None:
+            heading = scenario.current.heading
+        self.heading = heading
+        self.has_yaw = getattr(model, "vehicle_kind", "fixed") != "fixed"
+        self.eta = np.zeros((size, int(model.eta_size)))
+        self.joints = np.zeros((size, int(model.n_joints)))
+        self.vehicle_position = np.zeros((size, 3))
+        self.ee_position = np.zeros((size, 3))
+        self.ee_rotation = np.zeros((size, 3, 3))
+        self.target_position = np.full((size, 3), np.nan)
+        self.manipulability = np.zeros(size)
+        self.payload_moment = np.zeros(size) if self.payload_task is not None else None
+
+    def record(self, k: int, state: Any, t: float) -> None:
+        """Record state ``k`` at time ``t`` [s]."""
+        self.eta[k] = state.eta
+        self.joints[k] = state.joints
+        self.vehicle_position[k] = state.position("vehicle")
+        T = state.pose(self.frame)
+        self.ee_position[k] = T[:3, 3]
+        self.ee_rotation[k] = T[:3, :3]
+        if self.tracked is not None:
+            target = getattr(self.tracked, "target", None)
+            if callable(target):
+                position = target(t)[0]
+                if position is not None:
+                    self.target_position[k] = position
+        if self.manipulability_task is not None:
+            self.manipulability[k] = float(self.manipulability_task.compute_value(state)[0])
+        else:
+            self.manipulability[k] = yoshikawa(state.arm_jacobian("tool", rows="position"))
+        if self.payload_moment is not None:
+            self.payload_moment[k] = float(self.payload_task.compute_value(state)[0])
+
+    def arrays(self) -> dict[str, Any]:
+        """The recorded arrays by name (``yaw`` and ``payload_moment`` only when defined)."""
+        data: dict[str, Any] = {
+            "eta": self.eta,
+            "joints": self.joints,
+            "vehicle_position": self.vehicle_position,
+            "ee_position": self.ee_position,
+            "ee_rotation": self.ee_rotation,
+            "target_position": self.target_position,
+            "manipulability": self.manipulability,
+        }
+        if self.has_yaw and self.eta.shape[1]:
+            data["yaw"] = self.eta[:, -1].copy()
+        if self.payload_moment is not None:
+            data["payload_moment"] = self.payload_moment
+        return data

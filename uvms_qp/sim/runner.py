@@ -1,0 +1,332 @@
+"""Closed-loop kinematic simulation of a scenario.
+
+Each control step ``k`` at ``t_k = k dt``:
+
+1. apply the scenario events due at ``t_k`` (``task.update(**params)``);
+2. build the :class:`~uvms_qp.model.State` of ``q_k`` (kinematics computed once);
+3. ``zeta_k = scheme.step(state, t_k).zeta`` (the HQP controller or any scheme with the same
+   ``step``/``reset`` interface); a non-finite command is counted and replaced by zero;
+4. record the series and check the command against every hard row of the stack's constraints,
+   recomputed independently of the controller;
+5. ``q_{k+1} = integrator.step(q_k, zeta_k, dt)`` on the configuration manifold.
+
+The result keeps plain numpy arrays; :mod:`uvms_qp.sim.metrics` turns them into numbers and
+:mod:`uvms_qp.sim.results` writes them to ``results.json``.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._validation import FloatArray
+from ..errors import InputError
+from .probes import Probes
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .scenario import Scenario
+
+#: Runs expected to take longer than this [s] of wall time show a progress bar (when asked to).
+PROGRESS_AFTER = 2.0
+
+
+@dataclass
+class SimulationResult:
+    """Recorded series of one run (N steps, N+1 states).
+
+    Attributes:
+        scenario: Scenario name.
+        scheme: Scheme name (``"hqp"`` for the lexicographic QP controller).
+        solver: Solver name.
+        model: Model name.
+        dt: Control period [s].
+        steps: Number of steps N.
+        time: Step times ``t_k`` (N,) [s].
+        time_states: State times (N+1,) [s] (the last state follows the last step).
+        zeta: Commands (N, nv) [m/s, rad/s].
+        zeta_lower: Box lower bounds of the hard constraints per step (N, nv) (``-inf`` if none).
+        zeta_upper: Box upper bounds per step (N, nv) (``+inf`` if none).
+        q: Configurations (N+1, nq).
+        eta: Vehicle poses (N+1, eta_size) [m, rad].
+        joints: Joint angles (N+1, n_joints) [rad].
+        vehicle_position: Vehicle origin in the world (N+1, 3) [m].
+        vehicle_speed: Norm of the commanded vehicle linear body rates (N,) [m/s].
+        yaw: Vehicle heading psi (N+1,) [rad], or None for a fixed base.
+        ee_position: Tracked frame position (N+1, 3) [m], world frame.
+        ee_rotation: Tracked frame rotation (N+1, 3, 3).
+        target_position: Its target (N+1, 3) [m] (NaN where none).
+        manipulability: Manipulability measure (N+1,).
+        payload_moment: Payload moment (N+1,) [N m], or None without a payload task.
+        step_time: Controller step wall time (N,) [s].
+        status: Controller status per step.
+        level_residuals: Per-level residual norms (N, levels) (NaN where not reported).
+        task_residuals: Per-task residual norm series (N,) by task name.
+        task_units: Unit of each task residual.
+        bound_violation: Largest hard-row violation of each command (N,).
+        nan_steps: Number of non-finite commands.
+        joint_lower: Joint lower limits (n_joints,) [rad].
+        joint_upper: Joint upper limits (n_joints,) [rad].
+        zeta_names: Names of the entries of zeta.
+        joint_names: Joint names.
+        heading: Target heading of a current-alignment task or the current [rad], or None.
+        events: Events applied (time, task, update).
+        wall_time: Wall time of the whole run [s].
+    """
+
+    scenario: str
+    scheme: str
+    solver: str
+    model: str
+    dt: float
+    steps: int
+    time: FloatArray
+    time_states: FloatArray
+    zeta: FloatArray
+    zeta_lower: FloatArray
+    zeta_upper: FloatArray
+    q: FloatArray
+    eta: FloatArray
+    joints: FloatArray
+    vehicle_position: FloatArray
+    vehicle_speed: FloatArray
+    yaw: FloatArray | None
+    ee_position: FloatArray
+    ee_rotation: FloatArray
+    target_position: FloatArray
+    manipulability: FloatArray
+    payload_moment: FloatArray | None
+    step_time: FloatArray
+    status: list[str]
+    level_residuals: FloatArray
+    task_residuals: dict[str, FloatArray]
+    task_units: dict[str, str]
+    bound_violation: FloatArray
+    nan_steps: int
+    joint_lower: FloatArray
+    joint_upper: FloatArray
+    zeta_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    heading: float | None
+    events: list[dict[str, Any]] = field(default_factory=list)
+    wall_time: float = 0.0
+    phases: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    def metrics(self) -> dict[str, Any]:
+        """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`)."""
+        from .metrics import compute_metrics
+
+        return compute_metrics(self)
+
+    def phase_metrics(self) -> dict[str, dict[str, Any]]:
+        """Metrics of every scenario phase, by phase name."""
+        from .metrics import phase_metrics
+
+        return {name: phase_metrics(self, a, b) for name, (a, b) in self.phases.items()}
+
+
+def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: FloatArray,
+                          lower: FloatArray, upper: FloatArray) -> float:
+    """Largest violation of the constraints' hard rows by ``zeta``; fills the box into lower/upper.
+
+    The box of several constraints is their intersection.
+    """
+    lower.fill(-np.inf)
+    upper.fill(np.inf)
+    worst = 0.0
+    for constraint in constraints:
+        box = getattr(constraint, "box", None)
+        if box is not None:
+            bounds = box(state, dt)
+            if bounds is not None:
+                lo, hi = bounds
+                if lo is not None:
+                    np.maximum(lower, lo, out=lower)
+                if hi is not None:
+                    np.minimum(upper, hi, out=upper)
+        rows_method = getattr(constraint, "rows", None)
+        if rows_method is not None:
+            rows = rows_method(state, dt)
+            if rows is not None and rows.m:
+                worst = max(worst, float(rows.violation(zeta).max()))
+    box_violation = np.maximum(lower - zeta, 0.0) + np.maximum(zeta - upper, 0.0)
+    if box_violation.size:
+        worst = max(worst, float(box_violation.max()))
+    return worst
+
+
+class _Progress:
+    """A rich progress bar that appears only once a run has taken more than PROGRESS_AFTER [s]."""
+
+    def __init__(self, total: int, label: str, enabled: bool) -> None:
+        self.total = total
+        self.label = label
+        self.enabled = enabled
+        self.start = _time.perf_counter()
+        self._bar: Any = None
+        self._task: Any = None
+
+    def update(self, done: int) -> None:
+        if not self.enabled or done % 20:
+            return
+        if self._bar is None:
+            if _time.perf_counter() - self.start < PROGRESS_AFTER:
+                return
+            from rich.progress import Progress
+
+            self._bar = Progress(transient=True)
+            self._bar.start()
+            self._task = self._bar.add_task(self.label, total=self.total)
+        self._bar.update(self._task, completed=done)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+
+def simulate(
+    scenario: Scenario,
+    scheme: Any = None,
+    *,
+    scheme_name: str = "hqp",
+    duration: float | None = None,
+    progress: bool = False,
+) -> SimulationResult:
+    """Run a scenario in closed loop and record the series.
+
+    Args:
+        scenario: A freshly loaded scenario (its tasks keep run-time state; see
+            :meth:`Scenario.rebuild`).
+        scheme: Object with ``step(state, t) -> result`` (``.zeta``, ``.status``, ``.step_time``)
+            and ``reset()``; default: the scenario's HQP controller.
+        scheme_name: Name recorded in the results.
+        duration: Override of the scenario duration [s].
+        progress: Show a progress bar when the run takes more than a few seconds.
+
+    Raises:
+        InputError: a non-positive duration override.
+    """
+    if scheme is None:
+        scheme = scenario.make_controller()
+    reset = getattr(scheme, "reset", None)
+    if callable(reset):
+        reset()
+    model = scenario.model
+    dt = scenario.dt
+    total_time = scenario.duration if duration is None else float(duration)
+    if not total_time > 0.0 or not math.isfinite(total_time):
+        raise InputError(f"duration: expected a positive number of seconds, got {duration}")
+    n = max(1, round(total_time / dt))
+    nv, nq = int(model.nv), int(model.nq)
+    n_levels = len(scenario.stack.levels)
+    probes = Probes(scenario, n + 1)
+    constraints = list(scenario.constraints)
+    n_lin = sum(1 for dof in getattr(model, "actuated", ()) if dof in ("u", "v", "w"))
+
+    time = np.arange(n) * dt
+    time_states = np.arange(n + 1) * dt
+    zeta_log = np.zeros((n, nv))
+    lower_log = np.full((n, nv), -np.inf)
+    upper_log = np.full((n, nv), np.inf)
+    q_log = np.zeros((n + 1, nq))
+    step_time = np.zeros(n)
+    status: list[str] = []
+    level_res = np.full((n, n_levels), np.nan)
+    task_names = [task.name for task in scenario.tasks()]
+    task_res = {name: np.full(n, np.nan) for name in task_names}
+    task_units: dict[str, str] = {
+        task.name: str(getattr(task, "error_unit", "")) for task in scenario.tasks()
+    }
+    violation = np.zeros(n)
+    speed = np.zeros(n)
+    nan_steps = 0
+    applied: list[dict[str, Any]] = []
+    pending = list(scenario.events)
+    zero = np.zeros(nv)
+
+    def rates(q: FloatArray, t: float) -> FloatArray:
+        z = np.asarray(scheme.step(model.state(q), t).zeta, dtype=np.float64)
+        return z if np.all(np.isfinite(z)) else zero
+
+    bar = _Progress(n, f"{scenario.name} ({scheme_name})", progress)
+    q = np.array(scenario.q0, dtype=np.float64)
+    started = _time.perf_counter()
+    for k in range(n):
+        t = float(time[k])
+        while pending and pending[0].time <= t + 1e-9:
+            event = pending.pop(0)
+            scenario.task(event.task).update(**dict(event.update))
+            applied.append({"time": t, "task": event.task, "update": dict(event.update)})
+        state = model.state(q)
+        q_log[k] = q
+        probes.record(k, state, t)
+        result = scheme.step(state, t)
+        zeta = np.asarray(result.zeta, dtype=np.float64)
+        if zeta.shape != (nv,) or not np.all(np.isfinite(zeta)):
+            nan_steps += 1
+            zeta = zero
+        zeta_log[k] = zeta
+        step_time[k] = float(getattr(result, "step_time", float("nan")))
+        status.append(str(getattr(result, "status", "")))
+        hierarchy = getattr(result, "hierarchy", None)
+        residuals = getattr(hierarchy, "level_residuals", None)
+        if residuals is not None:
+            count = min(len(residuals), n_levels)
+            level_res[k, :count] = residuals[:count]
+        for name, value in (getattr(result, "task_residuals", None) or {}).items():
+            if name in task_res:
+                task_res[name][k] = float(value[0] if isinstance(value, tuple) else value)
+        violation[k] = _constraint_violation(
+            constraints, state, dt, zeta, lower_log[k], upper_log[k]
+        )
+        speed[k] = float(np.linalg.norm(zeta[:n_lin])) if n_lin else 0.0
+        q = scenario.integrator.step(q, zeta, dt, t, rates)
+        bar.update(k + 1)
+    bar.close()
+    wall = _time.perf_counter() - started
+    final_state = model.state(q)
+    q_log[n] = q
+    probes.record(n, final_state, float(time_states[n]))
+    data = probes.arrays()
+    return SimulationResult(
+        scenario=scenario.name,
+        scheme=scheme_name,
+        solver=str(getattr(scheme, "solver_name", scenario.solver)),
+        model=str(model.name),
+        dt=dt,
+        steps=n,
+        time=time,
+        time_states=time_states,
+        zeta=zeta_log,
+        zeta_lower=lower_log,
+        zeta_upper=upper_log,
+        q=q_log,
+        eta=data["eta"],
+        joints=data["joints"],
+        vehicle_position=data["vehicle_position"],
+        vehicle_speed=speed,
+        yaw=data.get("yaw"),
+        ee_position=data["ee_position"],
+        ee_rotation=data["ee_rotation"],
+        target_position=data["target_position"],
+        manipulability=data["manipulability"],
+        payload_moment=data.get("payload_moment"),
+        step_time=step_time,
+        status=status,
+        level_residuals=level_res,
+        task_residuals=task_res,
+        task_units=task_units,
+        bound_violation=violation,
+        nan_steps=nan_steps,
+        joint_lower=np.asarray(model.joint_lower, dtype=np.float64),
+        joint_upper=np.asarray(model.joint_upper, dtype=np.float64),
+        zeta_names=tuple(model.zeta_names),
+        joint_names=tuple(model.joint_names),
+        heading=probes.heading,
+        events=applied,
+        wall_time=wall,
+        phases={p.name: (p.start, p.end) for p in getattr(scenario, "phases", [])},
+    )
