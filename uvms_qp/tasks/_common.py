@@ -128,3 +128,20 @@ def eta_axes(model: Any) -> tuple[str, ...]:
 
 
 ANGLE_AXES = frozenset({"phi", "theta", "psi"})
+
+_LAST_POSE_JACOBIAN: list[Any] = [None, None]
+
+
+def vehicle_pose_jacobian(state: Any) -> FloatArray:
+    """``state.vehicle_pose_jacobian()``, computed once per state and shared by the tasks.
+
+    Several tasks (station keeping, current alignment, attitude) read rows of the same matrix in
+    one tick; the last state's matrix is kept (compared by identity). Do not modify the result.
+    """
+    cache = _LAST_POSE_JACOBIAN
+    if cache[0] is state:
+        return cache[1]  # type: ignore[no-any-return]
+    J = state.vehicle_pose_jacobian()
+    cache[0] = state
+    cache[1] = J
+    return J  # type: ignore[no-any-return]

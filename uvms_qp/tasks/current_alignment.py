@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import eta_axes, wrap_angle
+from ._common import eta_axes, vehicle_pose_jacobian, wrap_angle
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -83,7 +83,7 @@ class CurrentAlignmentTask(ErrorTask):
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Yaw row of the vehicle-pose Jacobian (1, nv)."""
-        return state.vehicle_pose_jacobian()[self._row: self._row + 1]
+        return vehicle_pose_jacobian(state)[self._row: self._row + 1]
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

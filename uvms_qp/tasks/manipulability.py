@@ -16,10 +16,65 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 
-def _cross_cols(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Column-wise cross product of two (3, n) arrays."""
-    return np.array((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]))
+def _scaled_pinv_t(Js: FloatArray) -> tuple[float, FloatArray]:
+    """Return ``(w, w (J_S^+)^T)`` with ``w = sqrt(det(J_S J_S^T))`` (or of ``J_S^T J_S``).
+
+    Small full-row-rank cases (2 or 3 rows) use the adjugate in plain floats, which avoids the
+    per-call overhead of LAPACK on tiny matrices: ``w G^{-1} = adj(G) / w``.
+    """
+    k, n = Js.shape
+    if k == 3 and n >= 3:
+        (a, b, c), (_, d, e), (_, _, f) = (Js @ Js.T).tolist()
+        A0, A1, A2 = d * f - e * e, c * e - b * f, b * e - c * d
+        det = a * A0 + b * A1 + c * A2
+        if det > 1e-24:
+            w = math.sqrt(det)
+            adj = np.array(((A0, A1, A2), (A1, a * f - c * c, b * c - a * e),
+                            (A2, b * c - a * e, a * d - b * b)))
+            return w, (adj @ Js) / w
+    elif k == 2 and n >= 2:
+        (a, b), (_, d) = (Js @ Js.T).tolist()
+        det = a * d - b * b
+        if det > 1e-24:
+            w = math.sqrt(det)
+            adj = np.array(((d, -b), (-b, a)))
+            return w, (adj @ Js) / w
+    G = Js @ Js.T if k <= n else Js.T @ Js
+    det = float(np.linalg.det(G)) if G.shape[0] > 0 else 1.0
+    w = math.sqrt(det) if det > 0.0 else 0.0
+    if w < 1e-12 * max(1.0, float(np.abs(G).max(initial=0.0))) ** (0.5 * G.shape[0]):
+        return w, w * np.linalg.pinv(Js).T
+    if k <= n:
+        return w, w * np.linalg.solve(G, Js)
+    return w, w * (Js @ np.linalg.inv(G))
+
+
+def _position_pinv_cols(cols: list[list[float]]) -> tuple[float, list[tuple[float, ...]]] | None:
+    """Fast path of :func:`_scaled_pinv_t` for the 3 position rows, in plain floats.
+
+    ``cols`` are the columns ``[v; w]`` of the twist Jacobian; returns ``(w, columns of
+    [w (J_p^+)^T; 0])`` or None when ``J_p J_p^T`` is (nearly) singular or n < 3.
+    """
+    if len(cols) < 3:
+        return None
+    a = b = c = d = e = f = 0.0
+    for v0, v1, v2, *_ in cols:
+        a += v0 * v0
+        b += v0 * v1
+        c += v0 * v2
+        d += v1 * v1
+        e += v1 * v2
+        f += v2 * v2
+    A0, A1, A2 = d * f - e * e, c * e - b * f, b * e - c * d
+    A4, A5, A8 = a * f - c * c, b * c - a * e, a * d - b * b
+    det = a * A0 + b * A1 + c * A2
+    if det <= 1e-24:
+        return None
+    w = math.sqrt(det)
+    s = 1.0 / w
+    out = [((A0 * v0 + A1 * v1 + A2 * v2) * s, (A1 * v0 + A4 * v1 + A5 * v2) * s,
+            (A2 * v0 + A5 * v1 + A8 * v2) * s, 0.0, 0.0, 0.0) for v0, v1, v2, *_ in cols]
+    return w, out
 
 
 def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float, FloatArray]:
@@ -36,8 +91,8 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
 
     which turn the trace into ``dw/dq_i = w (w_i . sum_{j>=i} c_j + v_i . sum_{j<i} d_j)`` with
     ``c_j = v_j x P_v,j + w_j x P_w,j``, ``d_j = P_v,j x w_j`` and ``P = (J_S^+)^T`` padded to six
-    rows. Units: ``w`` in the product of the row units (e.g. m^3 for 3 position rows); gradient
-    in those units per rad.
+    rows: O(n) work, no Hessian tensor. Units: ``w`` in the product of the row units (e.g. m^3
+    for 3 position rows); gradient in those units per rad.
 
     Args:
         J6: Twist Jacobian (6, n) of the frame, linear rows first.
@@ -46,28 +101,46 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
     Returns:
         ``(w, grad)`` with ``grad`` of shape (n,).
     """
-    sel = np.arange(3) if rows is None else np.asarray(rows)
-    Js = J6[sel]
-    k, n = Js.shape
-    G = Js @ Js.T if k <= n else Js.T @ Js
-    det = float(np.linalg.det(G)) if G.shape[0] > 0 else 1.0
-    w = math.sqrt(det) if det > 0.0 else 0.0
-    if w < 1e-10 * max(1.0, float(np.abs(G).max(initial=0.0))) ** (0.5 * G.shape[0]):
-        P = np.linalg.pinv(Js).T
-    elif k <= n:
-        P = np.linalg.solve(G, Js)
+    n = J6.shape[1]
+    cols = J6.T.tolist()
+    if rows is None or (len(rows) == 3 and list(rows) == [0, 1, 2]):
+        position = _position_pinv_cols(cols)
+        if position is not None:
+            w, pcols = position
+        else:
+            w, wP = _scaled_pinv_t(J6[:3])
+            pcols = [(*p, 0.0, 0.0, 0.0) for p in wP.T.tolist()]
     else:
-        P = Js @ np.linalg.inv(G)
-    P6 = np.zeros((6, n))
-    P6[sel] = P
-    V, W = J6[:3], J6[3:]
-    c = _cross_cols(V, P6[:3]) + _cross_cols(W, P6[3:])
-    d = _cross_cols(P6[:3], W)
-    suffix = np.cumsum(c[:, ::-1], axis=1)[:, ::-1]  # sum_{j>=i} c_j
-    prefix = np.zeros_like(d)
-    prefix[:, 1:] = np.cumsum(d, axis=1)[:, :-1]  # sum_{j<i} d_j
-    grad = w * (np.einsum("ij,ij->j", W, suffix) + np.einsum("ij,ij->j", V, prefix))
-    return w, grad
+        w, wP = _scaled_pinv_t(J6[rows])
+        P6 = np.zeros((6, n))
+        P6[rows] = wP
+        pcols = P6.T.tolist()
+    # c_j = v_j x p_j + w_j x pw_j ;  d_j = p_j x w_j   (pure floats: n is small)
+    c = []
+    d = []
+    for (v0, v1, v2, w0, w1, w2), (p0, p1, p2, r0, r1, r2) in zip(cols, pcols, strict=True):
+        c.append((v1 * p2 - v2 * p1 + w1 * r2 - w2 * r1,
+                  v2 * p0 - v0 * p2 + w2 * r0 - w0 * r2,
+                  v0 * p1 - v1 * p0 + w0 * r1 - w1 * r0))
+        d.append((p1 * w2 - p2 * w1, p2 * w0 - p0 * w2, p0 * w1 - p1 * w0))
+    grad = [0.0] * n
+    s0 = s1 = s2 = 0.0
+    for i in range(n - 1, -1, -1):  # suffix sums of c
+        ci = c[i]
+        s0 += ci[0]
+        s1 += ci[1]
+        s2 += ci[2]
+        col = cols[i]
+        grad[i] = col[3] * s0 + col[4] * s1 + col[5] * s2
+    t0 = t1 = t2 = 0.0
+    for i in range(n):  # exclusive prefix sums of d
+        col = cols[i]
+        grad[i] += col[0] * t0 + col[1] * t1 + col[2] * t2
+        di = d[i]
+        t0 += di[0]
+        t1 += di[1]
+        t2 += di[2]
+    return w, np.array(grad)
 
 
 def shaping_function(w: float, threshold: float) -> float:

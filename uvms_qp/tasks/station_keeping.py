@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ._common import ANGLE_AXES, eta_axes, parse_axes, wrap_angle
+from ._common import ANGLE_AXES, eta_axes, parse_axes, vehicle_pose_jacobian, wrap_angle
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -120,7 +120,7 @@ class StationKeepingTask(ErrorTask):
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Rows of the vehicle-pose Jacobian ``J_eta`` for the selected coordinates."""
-        return state.vehicle_pose_jacobian()[self._idx]
+        return vehicle_pose_jacobian(state)[self._idx]
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

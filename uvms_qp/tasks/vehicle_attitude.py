@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
-from ._common import eta_axes, parse_axes, wrap_angle
+from ._common import eta_axes, parse_axes, vehicle_pose_jacobian, wrap_angle
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -77,7 +77,7 @@ class VehicleAttitudeTask(ErrorTask):
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Rows of the vehicle-pose Jacobian for roll/pitch."""
-        return state.vehicle_pose_jacobian()[self._idx]
+        return vehicle_pose_jacobian(state)[self._idx]
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

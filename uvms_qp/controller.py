@@ -1,0 +1,465 @@
+"""The control loop: model + stack + solver -> one zeta per tick.
+
+Every tick :meth:`Controller.step` writes each task's rows and each constraint's bounds straight
+into buffers allocated once (no per-tick assembly of the problem), solves, and returns a
+:class:`StepResult`. The same stack can be solved three ways (``scheme``):
+
+* ``"hqp"``: the lexicographic QP (levels are strict priorities; the hard box and hard rows hold
+  at every level), with any back-end of :func:`uvms_qp.hqp.available_solvers`;
+* ``"weighted"``: one weighted QP, priorities turned into weights (level ``k`` of ``p`` gets its
+  squared violations multiplied by ``priority_ratio ** (p - 1 - k)``), same hard bounds: the
+  usual "soft priorities" of weighted differential IK, for comparison;
+* ``"nullspace"``: the closed-form recursive null-space scheme
+  (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels, in the metric W of Eq. (17)):
+  inequality rows are left out (the scheme has no notion of them) and the result is saturated
+  into the hard box afterwards (``StepResult.saturated`` tells when that happened); hard rows
+  are not enforced (their violation is reported).
+
+``metric`` is the diagonal W of the final regularisation ``min zeta' W zeta`` (e.g.
+:func:`uvms_qp.tasks.motion_distribution_weights`, ``003_229789978cc4b235.txt, Eq. (14)``, or
+``diag(10, 10, 10, 1, 1, 1)`` of paper 000).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from ._validation import FloatArray, as_scalar, as_vector
+from .constraints.constraint import Constraint
+from .errors import BoundsError, InputError, NonFiniteError
+from .hqp import HierarchyResult, HierarchySolver, Status
+from .hqp.evaluate import evaluate
+from .hqp.problem import Block, Problem
+from .hqp.rows import Rows
+from .stack import Stack
+from .tasks.task import Task
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .model import Model, State
+
+Scheme = Literal["hqp", "weighted", "nullspace"]
+SCHEMES: tuple[str, ...] = ("hqp", "weighted", "nullspace")
+
+
+@dataclass(eq=False)
+class StepResult:
+    """Outcome of one control tick; never None, ``zeta`` always finite.
+
+    Attributes:
+        zeta: Commanded ``[vehicle body rates; joint rates]`` (nv,) [m/s, rad/s].
+        status: Solver status (:class:`~uvms_qp.hqp.Status`: ``optimal``, ``level_infeasible``,
+            ``hard_infeasible``, ``backend_error``).
+        hierarchy: The solver's :class:`~uvms_qp.hqp.HierarchyResult` (per-level residuals,
+            slacks, active bounds, solve time).
+        t: Time of the tick [s].
+        step_time: Wall time of the whole step (rows, bounds, solve, residuals) [s].
+        scheme: ``"hqp"``, ``"weighted"`` or ``"nullspace"``.
+        solver: Back-end name.
+        lower: Hard lower bounds on zeta used this tick (nv,).
+        upper: Hard upper bounds on zeta used this tick (nv,).
+        saturated: True when the scheme's zeta had to be clipped into the box (nullspace).
+        level_names: Task names of each level.
+    """
+
+    zeta: FloatArray
+    status: Status
+    hierarchy: HierarchyResult
+    t: float
+    step_time: float
+    scheme: str
+    solver: str
+    lower: FloatArray
+    upper: FloatArray
+    saturated: bool = False
+    level_names: tuple[tuple[str, ...], ...] = ()
+    _task_names: tuple[str, ...] = ()
+    _rate_units: tuple[str, ...] = ()
+    _error_units: tuple[str, ...] = ()
+    _residual_sq: FloatArray = field(default_factory=lambda: np.zeros(0))
+    _errors: tuple[FloatArray | None, ...] = ()
+    _hard_rows_violation: float = 0.0
+    _level_sizes: tuple[int, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        """True when zeta is the scheme's optimum (``optimal`` or ``level_infeasible``)."""
+        return self.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+
+    @cached_property
+    def task_residuals(self) -> dict[str, tuple[float, str]]:
+        """Task name -> (norm of its row violation at zeta, unit of its rows)."""
+        return {name: (math.sqrt(s), unit) for name, s, unit in
+                zip(self._task_names, self._residual_sq.tolist(), self._rate_units, strict=True)}
+
+    @cached_property
+    def level_violations(self) -> list[float]:
+        """Per level: unweighted norm of the row violation at zeta (scheme-independent)."""
+        out = []
+        i = 0
+        sq = self._residual_sq.tolist()
+        for size in self._level_sizes:
+            out.append(math.sqrt(sum(sq[i:i + size])))
+            i += size
+        return out
+
+    @cached_property
+    def task_errors(self) -> dict[str, tuple[float, str]]:
+        """Task name -> (norm of its error or objective value this tick, unit); NaN if none."""
+        out = {}
+        for name, e, unit in zip(self._task_names, self._errors, self._error_units, strict=True):
+            out[name] = (float(np.sqrt(e @ e)) if e is not None else float("nan"), unit)
+        return out
+
+    @cached_property
+    def bound_violation(self) -> float:
+        """Largest violation of the hard box and hard rows at zeta (0 when they hold)."""
+        v = max(float(np.max(self.lower - self.zeta, initial=0.0)),
+                float(np.max(self.zeta - self.upper, initial=0.0)))
+        return max(v, self._hard_rows_violation)
+
+    def summary(self) -> str:
+        """A readable report: status, time, per-level and per-task residuals with units."""
+        lines = [f"t = {self.t:.3f} s  {self.scheme}/{self.solver}: {self.status.value}  "
+                 f"step {self.step_time * 1e6:.0f} us"
+                 + ("  (saturated into the box)" if self.saturated else "")]
+        res = self.task_residuals
+        err = self.task_errors
+        for k, names in enumerate(self.level_names):
+            lines.append(f"  level {k}: violation {self.level_violations[k]:.3e}")
+            for name in names:
+                r, ru = res[name]
+                e, eu = err[name]
+                lines.append(f"    {name:<22} residual {r:.3e} [{ru}]   error {e:.3e} [{eu}]")
+        lines.append(f"  zeta = {np.array2string(self.zeta, precision=4, suppress_small=True)}")
+        lines.append(f"  hard bound violation {self.bound_violation:.1e}")
+        if self.hierarchy.message:
+            lines.append(f"  {self.hierarchy.message}")
+        return "\n".join(lines)
+
+
+def nullspace_solve(problem: Problem, rtol: float = 1e-9) -> FloatArray:
+    r"""Closed-form recursive null-space solution of an equality hierarchy in the metric W.
+
+    Siciliano-Slotine recursion (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels,
+    weighted pseudoinverse of Eq. (17)); with ``u = W^(1/2) zeta``, ``Ã_k = D_k A_k W^(-1/2)``,
+    ``b̃_k = D_k b_k`` (``D_k`` the square roots of the row weights):
+
+        u_k = u_{k-1} + (Ã_k P_{k-1})^+ (b̃_k - Ã_k u_{k-1}),
+        P_k = P_{k-1} - (Ã_k P_{k-1})^+ Ã_k P_{k-1}.
+
+    The rank of each projected level is decided against the level's own unprojected size
+    (singular values below ``rtol * max(1, |Ã_k|)`` are dropped), so a level whose freedom is
+    used up by the levels above contributes nothing instead of amplifying round-off.
+    Inequality rows must have been removed; bounds are ignored.
+    """
+    n = problem.n
+    w_isqrt = 1.0 / np.sqrt(problem.W)
+    u = np.zeros(n)
+    P = np.eye(n)
+    for level in problem.levels:
+        if level.m == 0:
+            continue
+        d = np.sqrt(level.w)
+        At = (d[:, None] * level.A) * w_isqrt[None, :]
+        M = At @ P
+        U, sv, Vt = np.linalg.svd(M, full_matrices=False)
+        tol = rtol * max(1.0, float(np.abs(At).max()) * math.sqrt(n))
+        keep = sv > tol
+        if not keep.any():
+            continue
+        Mp = (Vt[keep].T / sv[keep]) @ U[:, keep].T
+        u = u + Mp @ (d * level.lo - At @ u)
+        P = P - Mp @ M
+        P = 0.5 * (P + P.T)
+    return w_isqrt * u
+
+
+class Controller:
+    """Solve a :class:`~uvms_qp.stack.Stack` on a model every tick.
+
+    Args:
+        model: The UVMS model (the stack is bound to it here).
+        stack: Levels of tasks and hard constraints.
+        solver: Back-end (``"daqp"``, ``"cascade:<qpsolvers name>"``, ``"nullspace"``).
+        dt: Control period [s] (turns position limits into rate bounds).
+        metric: Diagonal W (nv,) of the final regularisation ``min zeta' W zeta`` (positive), or
+            None for the identity.
+        scheme: ``"hqp"``, ``"weighted"`` or ``"nullspace"`` (see the module docstring).
+        priority_ratio: Weight ratio between consecutive levels for ``scheme="weighted"``.
+        options: Back-end options passed to :class:`~uvms_qp.hqp.HierarchySolver`.
+
+    Raises:
+        InputError: bad dt, metric or scheme; any binding error of the stack (unknown frame,
+            joint, axis...), with its location in the stack.
+        UnknownSolverError: unknown or uninstalled solver.
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        stack: Stack,
+        solver: str = "daqp",
+        dt: float = 0.05,
+        metric: Any = None,
+        *,
+        scheme: Scheme = "hqp",
+        priority_ratio: float = 1e4,
+        options: dict[str, Any] | None = None,
+    ) -> None:
+        if not isinstance(stack, Stack):
+            raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
+        if scheme not in SCHEMES:
+            raise InputError(f"scheme: expected one of {', '.join(SCHEMES)}, got {scheme!r}")
+        self.model = model
+        self.stack = stack.bind(model)
+        self.dt = as_scalar(dt, "dt", positive=True)
+        self.scheme = scheme
+        self.priority_ratio = as_scalar(priority_ratio, "priority_ratio", positive=True)
+        nv = int(model.nv)
+        self.nv = nv
+        self.metric = (np.ones(nv) if metric is None
+                       else as_vector(metric, "metric", nv))
+        if np.any(self.metric <= 0.0):
+            raise InputError(f"metric: expected positive weights, got min {self.metric.min():g}")
+        if scheme == "nullspace":
+            solver = "nullspace"
+        self._solver = HierarchySolver(solver, weights=self.metric, options=options)
+        self.solver_name = self._solver.name
+        self._build_buffers()
+
+    # ------------------------------------------------------------------------------------- set-up
+    def _build_buffers(self) -> None:
+        nv = self.nv
+        levels = self.stack.levels
+        tasks: list[Task] = [t for level in levels for t in level]
+        total = sum(t.dim for t in tasks)
+        self._A = np.zeros((total, nv))
+        self._lo = np.zeros(total)
+        self._hi = np.zeros(total)
+        self._w = np.ones(total)
+        self._slots: list[tuple[Task, FloatArray, FloatArray, FloatArray]] = []
+        self._task_slices: list[slice] = []
+        self._weight_refs: list[FloatArray | None] = []
+        starts = []
+        level_ranges = []
+        r = 0
+        for level in levels:
+            r0 = r
+            for t in level:
+                sl = slice(r, r + t.dim)
+                self._slots.append((t, self._A[sl], self._lo[sl], self._hi[sl]))
+                self._task_slices.append(sl)
+                self._weight_refs.append(None)
+                starts.append(r)
+                r += t.dim
+            level_ranges.append((r0, r))
+        self._tasks = tasks
+        self._starts = np.asarray(starts, dtype=np.intp)
+        self._level_ranges = level_ranges
+        self._equality_tasks = np.array([self._task_is_equality(t) for t in tasks], dtype=bool)
+        # hard rows
+        row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
+        box_cons = [c for c in self.stack.constraints if c.has_box]
+        mh = sum(c.rows_dim for c in row_cons)
+        self._HA = np.zeros((mh, nv))
+        self._Hlo = np.zeros(mh)
+        self._Hhi = np.zeros(mh)
+        self._row_slots: list[tuple[Constraint, FloatArray, FloatArray, FloatArray]] = []
+        r = 0
+        for c in row_cons:
+            sl = slice(r, r + c.rows_dim)
+            self._row_slots.append((c, self._HA[sl], self._Hlo[sl], self._Hhi[sl]))
+            r += c.rows_dim
+        self._box_cons = box_cons
+        self._lower = np.full(nv, -np.inf)
+        self._upper = np.full(nv, np.inf)
+        self._hard_block = Block(self._HA, self._Hlo, self._Hhi, np.ones(mh),
+                                 np.zeros(mh, dtype=bool), tuple(c.name for c in row_cons))
+        self._problem = self._make_problem()
+        self.level_names = tuple(level.names for level in levels)
+        self._level_sizes = tuple(len(level) for level in levels)
+        self._task_names = tuple(t.name for t in tasks)
+        self._rate_units = tuple(t.rate_unit for t in tasks)
+        self._error_units = tuple(t.error_unit for t in tasks)
+
+    @staticmethod
+    def _task_is_equality(task: Task) -> bool:
+        return bool(getattr(task, "mode", None) not in ("floor", "margin", "bound"))
+
+    def _make_problem(self) -> Problem:
+        """Problem whose blocks are views of the row buffers (filled in place every tick)."""
+        nv = self.nv
+        blocks: list[Block] = []
+        if self.scheme == "weighted":
+            self._level_eq = [np.zeros(self._A.shape[0], dtype=bool)]
+            self._w_level = np.ones(self._A.shape[0])
+            blocks.append(Block(self._A, self._lo, self._hi, self._w_level, self._level_eq[0],
+                                self._task_names_flat()))
+        elif self.scheme == "nullspace":
+            self._level_eq = []
+            self._ns_index: list[np.ndarray] = []
+            k = 0
+            for level in self.stack.levels:
+                keep = []
+                for _task in level:
+                    sl = self._task_slices[k]
+                    if self._equality_tasks[k]:
+                        keep.extend(range(sl.start, sl.stop))
+                    k += 1
+                idx = np.asarray(keep, dtype=np.intp)
+                self._ns_index.append(idx)
+                eq = np.ones(idx.size, dtype=bool)
+                self._level_eq.append(eq)
+                blocks.append(Block(np.zeros((idx.size, nv)), np.zeros(idx.size),
+                                    np.zeros(idx.size), np.ones(idx.size), eq, ()))
+        else:
+            self._level_eq = []
+            for (r0, r1), level in zip(self._level_ranges, self.stack.levels, strict=True):
+                eq = np.zeros(r1 - r0, dtype=bool)
+                self._level_eq.append(eq)
+                blocks.append(Block(self._A[r0:r1], self._lo[r0:r1], self._hi[r0:r1],
+                                    self._w[r0:r1], eq, level.names))
+        if self.scheme == "nullspace":
+            lower, upper = np.full(nv, -np.inf), np.full(nv, np.inf)
+        else:
+            lower, upper = self._lower, self._upper
+        return Problem(nv, tuple(blocks), self._hard_block, lower, upper, self.metric)
+
+    def _task_names_flat(self) -> tuple[str, ...]:
+        return tuple(t.name for t in self._tasks)
+
+    # -------------------------------------------------------------------------------------- API
+    @property
+    def tasks(self) -> tuple[Task, ...]:
+        """All tasks, highest priority first."""
+        return tuple(self._tasks)
+
+    def reset(self) -> None:
+        """Reset the run-time memory of every task (activation poses, previous values)."""
+        self.stack.reset()
+
+    def level_rows(self, state: State, t: float = 0.0) -> list[Rows]:
+        """Rows of every level at ``(state, t)`` (fresh copies; for inspection and tests)."""
+        self._fill(state, float(t))
+        return [Rows(self._A[a:b].copy(), self._lo[a:b].copy(), self._hi[a:b].copy(),
+                     self._w[a:b].copy(), f"level {k}")
+                for k, (a, b) in enumerate(self._level_ranges)]
+
+    def bounds(self, state: State) -> tuple[FloatArray, FloatArray]:
+        """Merged hard box ``(lower, upper)`` on zeta at ``state`` (copies)."""
+        self._fill_box(state)
+        return self._lower.copy(), self._upper.copy()
+
+    # ---------------------------------------------------------------------------------- hot path
+    def _fill(self, state: State, t: float) -> None:
+        for task, A, lo, hi in self._slots:
+            task.fill(state, t, A, lo, hi)
+        w = self._w
+        for k, task in enumerate(self._tasks):
+            rw = task.row_weights
+            if rw is not self._weight_refs[k]:
+                w[self._task_slices[k]] = rw
+                self._weight_refs[k] = rw
+                if self.scheme == "weighted":
+                    self._refresh_weighted()
+
+    def _refresh_weighted(self) -> None:
+        p = len(self._level_ranges)
+        for k, (a, b) in enumerate(self._level_ranges):
+            self._w_level[a:b] = self._w[a:b] * self.priority_ratio ** (p - 1 - k)
+
+    def _fill_box(self, state: State) -> None:
+        lower, upper = self._lower, self._upper
+        lower.fill(-np.inf)
+        upper.fill(np.inf)
+        dt = self.dt
+        for c in self._box_cons:
+            c.fill_box(state, dt, lower, upper)
+        if (lower > upper).any():
+            self._raise_empty_box(state)
+
+    def _raise_empty_box(self, state: State) -> None:
+        i = int(np.flatnonzero(self._lower > self._upper)[0])
+        parts = []
+        for c in self._box_cons:
+            lo, hi = c.box(state, self.dt)
+            if np.isfinite(lo[i]) or np.isfinite(hi[i]):
+                parts.append(f"{c.name} gives [{lo[i]:.4g}, {hi[i]:.4g}]")
+        name = self.model.zeta_names[i]
+        raise BoundsError(f"hard box on zeta[{i}] ({name}) is empty: " + "; ".join(parts))
+
+    def step(self, state: State, t: float = 0.0) -> StepResult:
+        """Compute zeta for ``state`` at time ``t`` [s].
+
+        Raises:
+            InputError: a task whose target was never set, a state of another model.
+            NonFiniteError: a task produced NaN/inf rows (the message names the task).
+            BoundsError: the hard box is empty (the message names the constraints involved).
+        """
+        start = time.perf_counter()
+        if state.model is not self.model:
+            raise InputError("state: belongs to another model than the controller's")
+        self._fill(state, t)
+        self._fill_box(state)
+        for c, HA, Hlo, Hhi in self._row_slots:
+            c.fill_rows(state, self.dt, HA, Hlo, Hhi)
+        A, lo, hi = self._A, self._lo, self._hi
+        if not (math.isfinite(A.sum()) and not np.isnan(lo).any() and not np.isnan(hi).any()):
+            self._raise_non_finite()
+        problem = self._problem
+        if self.scheme == "nullspace":
+            for block, idx in zip(problem.levels, self._ns_index, strict=True):
+                np.take(A, idx, axis=0, out=block.A)
+                np.take(lo, idx, out=block.lo)
+                np.take(hi, idx, out=block.hi)
+                np.take(self._w, idx, out=block.w)
+        else:
+            for block in problem.levels:
+                np.equal(block.lo, block.hi, out=block.eq)
+        saturated = False
+        if self.scheme == "nullspace":
+            t0 = time.perf_counter()
+            raw = nullspace_solve(problem)
+            zeta = np.minimum(np.maximum(raw, self._lower), self._upper)
+            saturated = bool(np.any(zeta != raw))
+            result = evaluate(problem, zeta, "nullspace", Status.OPTIMAL,
+                              "saturated into the hard box" if saturated else "",
+                              level_tol=self._solver.level_tol, hard_tol=self._solver.hard_tol,
+                              solve_time=time.perf_counter() - t0)
+        else:
+            result = self._solver.solve_problem(problem)
+            zeta = result.x
+        y = A @ zeta
+        viol = np.maximum(lo - y, 0.0)
+        viol += np.maximum(y - hi, 0.0)
+        viol *= viol
+        sq = np.add.reduceat(viol, self._starts) if viol.size else np.zeros(0)
+        hard_v = 0.0
+        if self._HA.shape[0]:
+            yh = self._HA @ zeta
+            hard_v = float(max(np.max(self._Hlo - yh), np.max(yh - self._Hhi), 0.0))
+        return StepResult(
+            zeta=zeta, status=result.status, hierarchy=result, t=t,
+            step_time=time.perf_counter() - start, scheme=self.scheme, solver=self.solver_name,
+            lower=self._lower.copy(), upper=self._upper.copy(), saturated=saturated,
+            level_names=self.level_names, _task_names=self._task_names,
+            _rate_units=self._rate_units, _error_units=self._error_units, _residual_sq=sq,
+            _errors=tuple(t._last_error for t in self._tasks), _hard_rows_violation=hard_v,
+            _level_sizes=self._level_sizes)
+
+    def _raise_non_finite(self) -> None:
+        for task, sl in zip(self._tasks, self._task_slices, strict=True):
+            if not (np.isfinite(self._A[sl]).all() and not np.isnan(self._lo[sl]).any()
+                    and not np.isnan(self._hi[sl]).any()):
+                raise NonFiniteError(f"task {task.name!r} produced non-finite rows")
+        raise NonFiniteError("non-finite rows")  # pragma: no cover
+
+    def __repr__(self) -> str:
+        return (f"Controller({self.model.name!r}, {len(self.stack.levels)} levels, "
+                f"scheme={self.scheme!r}, solver={self.solver_name!r}, dt={self.dt:g})")

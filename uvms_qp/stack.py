@@ -1,0 +1,184 @@
+"""Declarative stacks: levels of tasks in descending priority plus hard constraints.
+
+Example:
+    >>> from uvms_qp.stack import Level, Stack
+    >>> from uvms_qp.tasks import EndEffectorTask, StationKeepingTask
+    >>> from uvms_qp.constraints import JointVelocityBounds
+    >>> stack = Stack(
+    ...     levels=[Level(EndEffectorTask(position=[1.0, 0.0, 0.5], gain=2.0)),  # [1/s]
+    ...             Level(StationKeepingTask(gain=1.0))],
+    ...     constraints=[JointVelocityBounds()],
+    ... )
+    >>> [level.names for level in stack.levels]
+    [('end_effector',), ('station_keeping',)]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any
+
+from .constraints.constraint import Constraint
+from .errors import InputError
+from .tasks.task import Task
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .model import Model
+
+
+class Level:
+    """One priority level: tasks whose rows are traded off by their weights.
+
+    ``Level(task_a, task_b)`` or ``Level([task_a, task_b])``; an optional ``name`` labels it in
+    diagnostics.
+
+    Raises:
+        InputError: an empty level, or an item that is not a :class:`~uvms_qp.tasks.Task`.
+    """
+
+    def __init__(self, *tasks: Task | Iterable[Task], name: str | None = None) -> None:
+        items: list[Any] = []
+        for item in tasks:
+            if isinstance(item, Task):
+                items.append(item)
+            elif isinstance(item, Iterable) and not isinstance(item, str | bytes):
+                items.extend(item)
+            else:
+                items.append(item)
+        if not items:
+            raise InputError(f"level {name or ''}: a level needs at least one task".replace(
+                "level : ", "level: "))
+        for i, task in enumerate(items):
+            if not isinstance(task, Task):
+                raise InputError(f"level {name or ''} item {i}: expected a Task, got "
+                                 f"{type(task).__name__}")
+        self.tasks: tuple[Task, ...] = tuple(items)
+        self.name = name
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the level's tasks."""
+        return tuple(t.name for t in self.tasks)
+
+    @property
+    def dim(self) -> int:
+        """Total row count (after binding)."""
+        return sum(t.dim for t in self.tasks)
+
+    def __iter__(self) -> Iterator[Task]:
+        return iter(self.tasks)
+
+    def __len__(self) -> int:
+        return len(self.tasks)
+
+    def __repr__(self) -> str:
+        return f"Level({', '.join(repr(t) for t in self.tasks)})"
+
+
+class Stack:
+    """Levels of tasks (highest priority first) and hard constraints.
+
+    Validated at construction (non-empty levels, unique task names, types) and at
+    :meth:`bind` (frames, joints, axes and dimensions against the model).
+
+    Args:
+        levels: Levels in descending priority; a plain list of tasks is accepted as a level.
+        constraints: Hard constraints (bounds and inequalities) holding at every level.
+
+    Raises:
+        InputError: no level, an empty level, duplicate task names, wrong item types.
+    """
+
+    def __init__(self, levels: Sequence[Level | Sequence[Task]],
+                 constraints: Sequence[Constraint] = ()) -> None:
+        if isinstance(levels, Level) or not isinstance(levels, Sequence) or not levels:
+            raise InputError("levels: expected a non-empty list of levels")
+        built: list[Level] = []
+        for k, level in enumerate(levels):
+            if isinstance(level, Level):
+                built.append(level)
+            elif isinstance(level, Task):
+                built.append(Level(level))
+            elif isinstance(level, Sequence) and not isinstance(level, str | bytes):
+                if not level:
+                    raise InputError(f"levels[{k}]: a level needs at least one task")
+                built.append(Level(*level))
+            else:
+                raise InputError(f"levels[{k}]: expected a Level, got {type(level).__name__}")
+        seen: dict[str, int] = {}
+        for k, level in enumerate(built):
+            for task in level:
+                if task.name in seen:
+                    raise InputError(
+                        f"levels[{k}]: duplicate task name {task.name!r} (also in "
+                        f"levels[{seen[task.name]}]); give each task a unique name=")
+                seen[task.name] = k
+            if len(set(map(id, level.tasks))) != len(level.tasks):
+                raise InputError(f"levels[{k}]: the same task object appears twice")
+        if isinstance(constraints, Constraint) or not isinstance(constraints, Sequence):
+            raise InputError("constraints: expected a list of constraints")
+        names: set[str] = set()
+        for i, c in enumerate(constraints):
+            if not isinstance(c, Constraint):
+                raise InputError(f"constraints[{i}]: expected a Constraint, got "
+                                 f"{type(c).__name__}")
+            if c.name in names:
+                raise InputError(f"constraints[{i}]: duplicate constraint name {c.name!r}")
+            names.add(c.name)
+        self.levels: tuple[Level, ...] = tuple(built)
+        self.constraints: tuple[Constraint, ...] = tuple(constraints)
+        self.model: Model | None = None
+
+    @property
+    def tasks(self) -> tuple[Task, ...]:
+        """All tasks, highest priority first."""
+        return tuple(t for level in self.levels for t in level)
+
+    def task(self, name: str) -> Task:
+        """The task called ``name`` (raises InputError listing the known names)."""
+        for t in self.tasks:
+            if t.name == name:
+                return t
+        raise InputError(f"unknown task {name!r}; known tasks: "
+                         f"{', '.join(t.name for t in self.tasks)}")
+
+    def bind(self, model: Model) -> Stack:
+        """Bind every task and constraint to ``model`` (validates frames, joints, sizes).
+
+        Errors are re-raised with the location (``levels[1].tasks[0] (name): ...``).
+        """
+        for k, level in enumerate(self.levels):
+            for i, task in enumerate(level):
+                try:
+                    task.bind(model)
+                except Exception as exc:
+                    exc.args = (f"levels[{k}].tasks[{i}] ({task.name}): {exc}",
+                                *exc.args[1:]) if exc.args else exc.args
+                    raise
+        for i, c in enumerate(self.constraints):
+            try:
+                c.bind(model)
+            except Exception as exc:
+                exc.args = (f"constraints[{i}] ({c.name}): {exc}", *exc.args[1:]) \
+                    if exc.args else exc.args
+                raise
+        self.model = model
+        return self
+
+    def reset(self) -> None:
+        """Reset every task's run-time memory."""
+        for t in self.tasks:
+            t.reset()
+
+    def describe(self) -> str:
+        """A readable listing of levels, tasks and constraints."""
+        lines = []
+        for k, level in enumerate(self.levels):
+            lines.append(f"level {k}" + (f" ({level.name})" if level.name else ""))
+            lines.extend(f"  {t.describe()}" for t in level)
+        if self.constraints:
+            lines.append("hard: " + ", ".join(c.name for c in self.constraints))
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"Stack({len(self.levels)} levels, {len(self.constraints)} constraints)"
