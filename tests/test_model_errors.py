@@ -1,0 +1,206 @@
+"""Bad input raises the project's own errors, naming the culprit."""
+
+import math
+
+import numpy as np
+import pytest
+
+from uvms_qp import (
+    InputError,
+    Model,
+    ModelError,
+    ModelFileError,
+    NonFiniteError,
+    ShapeError,
+    UnknownFrameError,
+    UnknownModelError,
+    UnknownNameError,
+    load_model,
+)
+from uvms_qp.model import DHRow, Vehicle
+
+
+@pytest.fixture(scope="module")
+def rov():
+    return load_model("bluerov2_heavy_alpha5")
+
+
+def test_unknown_frame_lists_the_known_frames(rov):
+    state = rov.state(rov.home())
+    for call in (
+        lambda: state.pose("elbow"),
+        lambda: state.jacobian("elbow"),
+        lambda: state.arm_jacobian("elbow"),
+        lambda: state.pose_in("tool", "elbow"),
+        lambda: rov.frame_pose(rov.home(), "elbow"),
+        lambda: rov.frame_id("elbow"),
+    ):
+        with pytest.raises(UnknownFrameError) as info:
+            call()
+        message = str(info.value)
+        assert "'elbow'" in message
+        for frame in ("world", "vehicle", "arm_base", "tool", "jaws_base_link"):
+            assert frame in message
+        assert info.value.known == rov.frames
+
+
+def test_wrong_configuration_length(rov):
+    with pytest.raises(ShapeError, match=r"q: expected shape \(11,\)"):
+        rov.state(np.zeros(10))
+    with pytest.raises(ShapeError, match="q"):
+        rov.integrate(np.zeros(12), np.zeros(10), 0.1)
+    with pytest.raises(ShapeError, match="joints: expected length 4"):
+        rov.configuration(np.zeros(6), np.zeros(5))
+    with pytest.raises(ShapeError, match="eta: expected length 6"):
+        rov.configuration(np.zeros(3), np.zeros(4))
+
+
+def test_wrong_zeta_length(rov):
+    with pytest.raises(ShapeError, match="zeta: expected length 10, got 9"):
+        rov.integrate(rov.home(), np.zeros(9), 0.1)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite_configuration(rov, bad):
+    q = rov.home()
+    q[8] = bad
+    with pytest.raises(NonFiniteError, match=r"q contains .* index 8"):
+        rov.state(q)
+    with pytest.raises(NonFiniteError, match="q"):
+        rov.check_configuration(q)
+
+
+def test_non_finite_zeta_and_dt(rov):
+    with pytest.raises(NonFiniteError, match="zeta"):
+        rov.integrate(rov.home(), [0, 0, 0, 0, 0, 0, 0, math.nan, 0, 0], 0.1)
+    with pytest.raises(NonFiniteError, match="dt"):
+        rov.integrate(rov.home(), np.zeros(10), math.inf)
+
+
+def test_quaternion_drift_is_normalised_and_large_errors_rejected(rov):
+    q = rov.home()
+    q[3:7] *= 1.0 + 1e-5
+    fixed = rov.check_configuration(q)
+    assert np.linalg.norm(fixed[3:7]) == pytest.approx(1.0, abs=1e-15)
+    q[3:7] = [0.0, 0.0, 0.0, 2.0]
+    with pytest.raises(InputError, match=r"quaternion q\[3:7\]"):
+        rov.state(q)
+
+
+def test_missing_urdf(tmp_path):
+    path = tmp_path / "nowhere.urdf"
+    with pytest.raises(ModelFileError, match=r"nowhere\.urdf.*no such file") as info:
+        Model.from_urdf(path)
+    assert isinstance(info.value, FileNotFoundError)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("<robot name='x'><link name='a'>", "does not parse as XML"),
+        ("<model/>", "root element is <model>"),
+        (
+            "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
+            "<parent link='a'/><child link='b'/><axis xyz='0 0 1'/></joint></robot>",
+            "joint 'j' .*needs <limit",
+        ),
+        (
+            "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
+            "<child link='zz'/><limit lower='0' upper='1' velocity='1' effort='1'/>"
+            "</joint></robot>",
+            "child link 'zz' is not a <link>",
+        ),
+        (
+            "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
+            "<parent link='a'/><child link='b'/><origin xyz='0 zero 0'/>"
+            "<limit lower='0' upper='1' velocity='1' effort='1'/></joint></robot>",
+            "Pinocchio could not build it",
+        ),
+    ],
+)
+def test_unparsable_urdf_names_the_file(tmp_path, text, match):
+    path = tmp_path / "broken.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelFileError, match=match) as info:
+        Model.from_urdf(path)
+    assert "broken.urdf" in str(info.value)
+
+
+def test_unsupported_urdf_joint_and_ambiguous_tool(tmp_path):
+    path = tmp_path / "cont.urdf"
+    path.write_text(
+        "<robot name='x'><link name='a'/><link name='b'/><joint name='spin' type='continuous'>"
+        "<parent link='a'/><child link='b'/><axis xyz='0 0 1'/></joint></robot>"
+    )
+    with pytest.raises(ModelError, match="'spin' has type 'continuous'"):
+        Model.from_urdf(path)
+    path = tmp_path / "fork.urdf"
+    limit = "<limit lower='-1' upper='1' velocity='1' effort='1'/>"
+    path.write_text(
+        "<robot name='x'><link name='a'/><link name='b'/><link name='c'/>"
+        f"<joint name='j1' type='revolute'><parent link='a'/><child link='b'/>{limit}</joint>"
+        f"<joint name='j2' type='revolute'><parent link='a'/><child link='c'/>{limit}</joint>"
+        "</robot>"
+    )
+    with pytest.raises(ModelError, match="several leaf links"):
+        Model.from_urdf(path)
+    with pytest.raises(UnknownFrameError, match="'d'; known frames: a, b, c"):
+        Model.from_urdf(path, tool="d")
+    assert Model.from_urdf(path, tool="c").n_joints == 2
+
+
+def test_unknown_model_lists_bundled_models():
+    with pytest.raises(UnknownModelError, match="'rov'; known models: soylu_planar"):
+        load_model("rov")
+
+
+def test_bad_dh_tables():
+    with pytest.raises(InputError, match=r"table\[0\]: expected a DHRow or a mapping"):
+        Model.from_dh([(1.0, 0.0, 0.0, 0.0)])
+    with pytest.raises(InputError, match=r"table\[1\]: unknown keys \['length'\]"):
+        Model.from_dh([{"a": 1.0}, {"length": 1.0}])
+    with pytest.raises(NonFiniteError, match=r"table\[0\].d"):
+        Model.from_dh([{"a": 1.0, "d": math.nan}])
+    with pytest.raises(InputError, match=r"table\[0\]: lower limit 1.0 > upper limit 0.0"):
+        Model.from_dh([DHRow(lower=1.0, upper=0.0)])
+    with pytest.raises(InputError, match="convention: unknown 'craig'"):
+        Model.from_dh([DHRow()], "craig")
+    with pytest.raises(ModelError, match="no revolute or prismatic"):
+        Model.from_dh([DHRow(kind="fixed")])
+    with pytest.raises(ModelError, match="non-empty"):
+        Model.from_dh([])
+    with pytest.raises(ShapeError, match="joint_names: expected 1 names"):
+        Model.from_dh([DHRow()], joint_names=["a", "b"])
+    with pytest.raises(ModelError, match="clash with vehicle DOF names"):
+        Model.from_dh([DHRow(name="u")])
+    with pytest.raises(ModelError, match="reserved"):
+        Model.from_dh([DHRow(name="tool")])
+    with pytest.raises(ShapeError, match="joint_lower: expected length 1"):
+        Model.from_dh([DHRow()], joint_lower=[0.0, 1.0])
+
+
+def test_bad_mounts_and_vehicles():
+    with pytest.raises(InputError, match="mount: the 3x3 block is not a rotation"):
+        Model.from_dh([DHRow()], mount=np.diag([2.0, 1.0, 1.0, 1.0]))
+    with pytest.raises(ShapeError, match="mount: expected 4 rows"):
+        Model.from_dh([DHRow()], mount=np.eye(3))
+    with pytest.raises(InputError, match=r"mount: unknown keys \['xyzz'\]"):
+        Model.from_dh([DHRow()], mount={"xyzz": (0, 0, 0)})
+    with pytest.raises(InputError, match="unknown spatial DOF 'x'"):
+        Vehicle("spatial", actuated=("u", "x"))
+    with pytest.raises(InputError, match="vehicle kind: unknown 'boat'"):
+        Vehicle("boat")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="vehicle: expected a Vehicle"):
+        Model.from_dh([DHRow()], vehicle=3)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="vehicle rate_limit: must be positive"):
+        Vehicle("planar", rate_limit=(1.0, 0.0, 1.0))
+
+
+def test_bad_rows_and_axes_names(rov):
+    state = rov.state(rov.home())
+    rows = "unknown row set 'linear'; known row sets: twist, position"
+    with pytest.raises(UnknownNameError, match=rows):
+        state.jacobian("tool", rows="linear")
+    axes = "unknown axis convention 'body'; known axis conventions: world, local"
+    with pytest.raises(UnknownNameError, match=axes):
+        state.jacobian("tool", axes="body")
