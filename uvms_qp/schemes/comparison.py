@@ -1,0 +1,279 @@
+"""Run one scenario under every scheme it names and tabulate the metrics side by side.
+
+:func:`compare` loads a scenario, runs its HQP stack and each closed-form scheme listed in the
+scenario's ``schemes`` (each on a fresh copy of the scenario, so tasks and events start clean),
+records the schemes' own diagnostic scalars (shaping function, fuzzy weights, path rate...) every
+step, and returns a :class:`Comparison`. :meth:`Comparison.write` stores one ``results.json`` per
+scheme (the simulator's writer, in ``DIR/<scheme>/``), the recorded diagnostics
+(``DIR/<scheme>/scheme_info.json``) and the table (``DIR/comparison.md``, ``DIR/comparison.json``).
+
+Besides the simulator's metrics, the table reports a few that the papers' claims need:
+``min_manipulability_time`` [s], ``joint_rate_max`` [rad/s], ``vehicle_speed_max`` [m/s],
+``vehicle_yaw_final`` [rad], and ``tool_base_radius_max``/``_mean`` [m], the horizontal distance
+of the tool from the arm base z axis (``sqrt(x_E^2 + y_E^2)`` in the arm base frame): the payload
+moment per newton of ``003_229789978cc4b235.txt, Eq. (20)``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._validation import FloatArray
+from ..errors import ConfigError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..sim.runner import SimulationResult
+    from ..sim.scenario import Scenario
+
+#: Rows of the comparison table: (metric key, unit, format).
+TABLE_METRICS: tuple[tuple[str, str], ...] = (
+    ("ee_error_max", "m"),
+    ("ee_error_rms", "m"),
+    ("min_manipulability", ""),
+    ("min_manipulability_time", "s"),
+    ("vehicle_displacement_max", "m"),
+    ("vehicle_speed_max", "m/s"),
+    ("vehicle_yaw_final", "rad"),
+    ("vehicle_yaw_error_final", "rad"),
+    ("joint_rate_max", "rad/s"),
+    ("joint_limit_violation_max", "rad"),
+    ("bound_violation_max", ""),
+    ("payload_moment_max", "N m^2"),
+    ("tool_base_radius_max", "m"),
+    ("tool_base_radius_mean", "m"),
+    ("step_time_median_us", "us"),
+    ("nan_steps", ""),
+)
+
+
+class _Recorder:
+    """Wrap a controller or scheme: same ``step``/``reset``, plus a per-step log of its ``info``."""
+
+    def __init__(self, scheme: Any) -> None:
+        self.scheme = scheme
+        self.solver_name = getattr(scheme, "solver_name", None)
+        self.series: dict[str, list[float]] = {}
+        self._count = 0
+
+    def reset(self) -> None:
+        reset = getattr(self.scheme, "reset", None)
+        if callable(reset):
+            reset()
+        self.series = {}
+        self._count = 0
+
+    def step(self, state: Any, t: float) -> Any:
+        result = self.scheme.step(state, t)
+        info = getattr(self.scheme, "info", None) or {}
+        for key, value in info.items():
+            column = self.series.setdefault(key, [math.nan] * self._count)
+            column.append(float(value))
+        self._count += 1
+        for column in self.series.values():
+            if len(column) < self._count:
+                column.append(math.nan)
+        return result
+
+    def arrays(self) -> dict[str, FloatArray]:
+        return {key: np.asarray(values) for key, values in self.series.items()}
+
+
+@dataclass
+class SchemeRun:
+    """One scheme's run of the scenario.
+
+    Attributes:
+        name: Scheme name (``"hqp"`` for the scenario's stack).
+        result: The simulator's record.
+        info: Per-step diagnostic series of the scheme (name -> (N,) array).
+        metrics: Simulator metrics plus the extra ones of this module.
+    """
+
+    name: str
+    result: SimulationResult
+    info: dict[str, FloatArray] = field(default_factory=dict)
+    metrics: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Comparison:
+    """All runs of one scenario.
+
+    Attributes:
+        scenario: Scenario name.
+        description: Its description.
+        runs: One :class:`SchemeRun` per scheme, in the scenario's order (``hqp`` first).
+    """
+
+    scenario: str
+    description: str
+    runs: list[SchemeRun]
+
+    def run(self, name: str) -> SchemeRun:
+        """The run of scheme ``name``.
+
+        Raises:
+            KeyError: no such scheme in this comparison (the known ones are listed).
+        """
+        for run in self.runs:
+            if run.name == name:
+                return run
+        raise KeyError(f"no run of scheme {name!r}; runs: {', '.join(r.name for r in self.runs)}")
+
+    def table(self) -> list[tuple[str, str, list[Any]]]:
+        """Rows ``(metric, unit, values per run)`` for metrics present in at least one run."""
+        rows = []
+        for key, unit in TABLE_METRICS:
+            values = [run.metrics.get(key) for run in self.runs]
+            if any(v is not None for v in values):
+                rows.append((key, unit, values))
+        return rows
+
+    def markdown(self) -> str:
+        """The table as GitHub markdown (one column per scheme)."""
+        names = [run.name for run in self.runs]
+        lines = [
+            f"| metric | unit | {' | '.join(names)} |",
+            "|---|---|" + "---|" * len(names),
+        ]
+        for key, unit, values in self.table():
+            lines.append(f"| {key} | {unit} | {' | '.join(format_value(v) for v in values)} |")
+        return "\n".join(lines)
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        """Write every run's ``results.json`` and diagnostics, and the comparison table."""
+        from ..sim.results import write_results
+
+        directory = Path(out_dir)
+        directory.mkdir(parents=True, exist_ok=True)
+        written = []
+        for run in self.runs:
+            sub = directory / run.name
+            written.append(write_results(run.result, sub))
+            info_path = sub / "scheme_info.json"
+            payload = {
+                "scheme": run.name,
+                "time": run.result.time.tolist(),
+                "series": {k: _json_list(v) for k, v in run.info.items()},
+                "metrics": {k: _json_value(v) for k, v in run.metrics.items()},
+            }
+            info_path.write_text(json.dumps(payload, allow_nan=False), encoding="utf-8")
+            written.append(info_path)
+        md = directory / "comparison.md"
+        md.write_text(f"# {self.scenario}\n\n{self.description}\n\n{self.markdown()}\n",
+                      encoding="utf-8")
+        table = {
+            "scenario": self.scenario,
+            "schemes": [run.name for run in self.runs],
+            "metrics": {key: {"unit": unit, "values": [_json_value(v) for v in values]}
+                        for key, unit, values in self.table()},
+        }
+        js = directory / "comparison.json"
+        js.write_text(json.dumps(table, allow_nan=False, indent=1), encoding="utf-8")
+        return [*written, md, js]
+
+
+def format_value(value: Any) -> str:
+    """Compact text of a metric value for tables."""
+    if value is None:
+        return "-"
+    if isinstance(value, bool | int | np.integer):
+        return str(int(value))
+    if isinstance(value, float | np.floating):
+        if not math.isfinite(value):
+            return str(value)
+        return f"{value:.4g}"
+    return str(value)
+
+
+def _json_value(value: Any) -> Any:
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, float | np.floating):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_value(v) for k, v in value.items()}
+    return value
+
+
+def _json_list(values: FloatArray) -> list[float | None]:
+    return [float(v) if math.isfinite(v) else None for v in np.asarray(values).tolist()]
+
+
+def extra_metrics(result: SimulationResult, model: Any) -> dict[str, Any]:
+    """The comparison's extra metrics of one run (see the module docstring)."""
+    out: dict[str, Any] = {}
+    mu = np.asarray(result.manipulability, dtype=np.float64)
+    if mu.size and np.isfinite(mu).any():
+        out["min_manipulability_time"] = float(result.time_states[int(np.nanargmin(mu))])
+    nveh = int(model.n_vehicle)
+    arm = result.zeta[:, nveh:]
+    out["joint_rate_max"] = float(np.abs(arm).max()) if arm.size else 0.0
+    if nveh:
+        out["vehicle_speed_max"] = float(np.max(result.vehicle_speed, initial=0.0))
+    if result.yaw is not None:
+        out["vehicle_yaw_final"] = float(result.yaw[-1])
+    radius = tool_base_radius(result, model)
+    out["tool_base_radius_max"] = float(radius.max())
+    out["tool_base_radius_mean"] = float(radius.mean())
+    return out
+
+
+def tool_base_radius(result: SimulationResult, model: Any, frame: str = "tool") -> FloatArray:
+    """Horizontal distance of the tool from the arm base z axis per state (N+1,) [m]."""
+    radius = np.empty(result.q.shape[0])
+    for k, q in enumerate(result.q):
+        p = model.state(q).pose_in(frame, "arm_base")[:3, 3]
+        radius[k] = math.hypot(float(p[0]), float(p[1]))
+    return radius
+
+
+def compare(
+    source: str | Path | Scenario,
+    schemes: list[str] | None = None,
+    *,
+    progress: bool = False,
+) -> Comparison:
+    """Run a scenario under each of its schemes.
+
+    Args:
+        source: Scenario file, bundled scenario name, or a loaded scenario.
+        schemes: Subset of the scenario's schemes to run (default: all, ``hqp`` first).
+        progress: Show progress bars for long runs.
+
+    Raises:
+        ConfigError: invalid scenario, or a scheme name that is unknown or not in the scenario.
+    """
+    from ..sim.runner import simulate
+    from ..sim.scenario import Scenario, load_scenario
+    from . import build_scheme
+
+    base = source if isinstance(source, Scenario) else load_scenario(source)
+    names = list(base.schemes)
+    if schemes is not None:
+        for name in schemes:
+            if name not in names:
+                raise ConfigError(
+                    f"scheme {name!r} is not compared by scenario {base.name!r}; "
+                    f"its schemes: {', '.join(names)}", "schemes"
+                )
+        names = [n for n in names if n in schemes]
+    runs = []
+    for index, name in enumerate(names):
+        scenario = base.rebuild()
+        scheme = (scenario.make_controller() if name == "hqp"
+                  else build_scheme(name, scenario, f"schemes[{index}]"))
+        recorder = _Recorder(scheme)
+        result = simulate(scenario, recorder, scheme_name=name, progress=progress)
+        if name != "hqp":
+            result.solver = str(getattr(scheme, "solver_name", "closed-form"))
+        metrics = dict(result.metrics())
+        metrics.update(extra_metrics(result, scenario.model))
+        runs.append(SchemeRun(name, result, recorder.arrays(), metrics))
+    return Comparison(base.name, base.description, runs)
