@@ -130,3 +130,31 @@ def test_sc_validation():
         self_motion_field([0.1, 0.2, 0.3, 0.4], scale="bogus")
     with pytest.raises(InputError, match="d3"):
         sc_arm_position([0, 0, 0, 0], d3=-1.0)
+
+
+def test_natural_motion_crosses_extended_arm_singularity_on_the_line():
+    # paper 002, run 1: start (0, 0, 0, -90) deg, v_hat = (1, 0, 0), b_sm = 0. With the printed
+    # Jacobian, f_ep5 = S4 = -1 at the start, so b_ep = -1 moves the wrist toward +x first.
+    q = np.deg2rad([0.0, 0.0, 0.0, -90.0])
+    v = [1.0, 0.0, 0.0]
+    dt = 0.005
+
+    def f(q):
+        return sc_blend(q, v, 0.0, -1.0)[:4]
+
+    s4, rates, pos = [], [], []
+    for _ in range(300):  # 1.5 s, RK4
+        k1 = f(q)
+        k2 = f(q + dt / 2 * k1)
+        k3 = f(q + dt / 2 * k2)
+        k4 = f(q + dt * k3)
+        q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        s4.append(np.sin(q[3]))
+        rates.append(np.abs(k1).max())
+        pos.append(sc_arm_position(q))
+    pos = np.array(pos)
+    assert np.allclose(pos[:, 1:], [0.0, 1.0], atol=1e-9)  # stays on the straight line
+    assert pos[:, 0].max() > np.sqrt(3) - 1e-3  # reaches the workspace boundary x = sqrt(3)
+    assert np.any(np.diff(np.sign(s4)) != 0)  # q4 passes through 0: singularity crossed
+    assert max(rates) < 2.0  # with bounded joint rates
+    assert pos[-1, 0] < pos[:, 0].max()  # and the motion reverses

@@ -214,11 +214,19 @@ def self_motion_field(
     """
     d3, d5 = _links(d3, d5)
     factor = _scale_factor(q, d3, d5, scale)
-    J = sc_arm_jacobian(q, d3, d5)
+    return factor * _self_motion(sc_arm_jacobian(q, d3, d5))
+
+
+def _self_motion(J: FloatArray) -> FloatArray:
     f = np.zeros(5)
     f[:4] = _signed_minors(J)
     f[3] = 0.0  # det J[:, :3] == 0 identically; drop round-off
-    return factor * f
+    return f
+
+
+def _end_point(J: FloatArray, direction: Any) -> FloatArray:
+    H = column_augmented_jacobian(J, direction)
+    return np.insert(-_signed_minors(np.delete(H, 2, axis=1)), 2, 0.0)
 
 
 def end_point_field(
@@ -247,10 +255,7 @@ def end_point_field(
     """
     d3, d5 = _links(d3, d5)
     factor = _scale_factor(q, d3, d5, scale)
-    H = column_augmented_jacobian(sc_arm_jacobian(q, d3, d5), direction)
-    reduced = _signed_minors(np.delete(H, 2, axis=1))
-    f = np.insert(-reduced, 2, 0.0)
-    return factor * f
+    return factor * _end_point(sc_arm_jacobian(q, d3, d5), direction)
 
 
 def sc_blend(
@@ -278,7 +283,10 @@ def sc_blend(
     """
     b_sm = as_scalar(b_sm, "b_sm")
     b_ep = as_scalar(b_ep, "b_ep")
-    out = b_ep * end_point_field(q, direction, d3, d5, scale)
+    d3, d5 = _links(d3, d5)
+    factor = _scale_factor(q, d3, d5, scale)
+    J = sc_arm_jacobian(q, d3, d5)
+    out = b_ep * _end_point(J, direction)
     if b_sm != 0.0:
-        out = out + b_sm * self_motion_field(q, d3, d5, scale)
-    return out
+        out = out + b_sm * _self_motion(J)
+    return factor * out
