@@ -40,6 +40,7 @@ STANDARD_FRAMES: tuple[str, ...] = ("world", "vehicle", "arm_base", "tool")
 #: Largest accepted deviation of a unit quaternion's squared norm from 1 before rejection.
 QUATERNION_TOLERANCE = 1e-3
 _VEHICLE_JOINT = "vehicle_joint"
+_F64 = np.dtype(np.float64)
 
 
 def _limits(value: Any, default: FloatArray, name: str, n: int) -> FloatArray:
@@ -357,10 +358,13 @@ class Model:
             NonFiniteError: ``q`` holds NaN or inf.
             InputError: the vehicle orientation is far from unit norm.
         """
-        try:
-            q = np.array(q, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"q: expected numbers, got {type(q).__name__}") from exc
+        if type(q) is np.ndarray and q.dtype is _F64:
+            q = q.copy()  # fast path for the control loop
+        else:
+            try:
+                q = np.array(q, dtype=np.float64)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"q: expected numbers, got {type(q).__name__}") from exc
         if q.shape != (self.nq,):
             raise ShapeError(
                 f"q: expected shape ({self.nq},) for model {self.name!r} "
@@ -369,15 +373,14 @@ class Model:
         if not math.isfinite(q.dot(q)):
             as_vector(q, "q")  # raises NonFiniteError naming the first bad index
             raise NonFiniteError("q: values too large")
-        kind = self.vehicle_kind
-        if kind != "fixed":
-            part = q[3:7] if kind == "spatial" else q[2:4]
+        if self.vehicle_kind != "fixed" and not pin.isNormalized(self.pin_model, q, 1e-12):
+            spatial = self.vehicle_kind == "spatial"
+            part = q[3:7] if spatial else q[2:4]
             norm2 = part.dot(part)
-            if norm2 != 1.0:
-                if abs(norm2 - 1.0) > QUATERNION_TOLERANCE:
-                    what = "quaternion q[3:7]" if kind == "spatial" else "(cos, sin) q[2:4]"
-                    raise InputError(f"q: vehicle {what} has squared norm {norm2:.6g}, not 1")
-                part /= math.sqrt(norm2)
+            if abs(norm2 - 1.0) > QUATERNION_TOLERANCE:
+                what = "quaternion q[3:7]" if spatial else "(cos, sin) q[2:4]"
+                raise InputError(f"q: vehicle {what} has squared norm {norm2:.6g}, not 1")
+            part /= math.sqrt(norm2)
         return q
 
     def configuration(self, eta: Any, joints: Any) -> FloatArray:

@@ -39,7 +39,7 @@ def _rows(rows: str) -> slice:
     try:
         return _ROWS[rows]
     except (KeyError, TypeError):
-        raise UnknownNameError("rows", rows, _ROWS) from None
+        raise UnknownNameError("row set", rows, _ROWS) from None
 
 
 class State:
@@ -59,7 +59,7 @@ class State:
     def __init__(self, model: Model, q: Any) -> None:
         """Validate ``q`` and compute the kinematics (see :meth:`Model.check_configuration`)."""
         q = model.check_configuration(q)
-        q.flags.writeable = False
+        q.setflags(write=False)
         self.model = model
         self.q: FloatArray = q
         self._poses: dict[str, FloatArray] = {}
@@ -87,7 +87,7 @@ class State:
         if self._eta is None:
             m = self.model
             eta = m.vehicle.eta_from_q(self.q[: m.nq_vehicle])
-            eta.flags.writeable = False
+            eta.setflags(write=False)
             self._eta = eta
         return self._eta
 
@@ -108,7 +108,7 @@ class State:
         if T is None:
             fid = self.model.frame_id(frame)
             T = self._sync().oMf[fid].homogeneous
-            T.flags.writeable = False
+            T.setflags(write=False)
             self._poses[frame] = T
         return T
 
@@ -162,13 +162,14 @@ class State:
         try:
             reference = _AXES[axes]
         except (KeyError, TypeError):
-            raise UnknownNameError("axes", axes, _AXES) from None
+            raise UnknownNameError("axis convention", axes, _AXES) from None
         model = self.model
         fid = model.frame_id(frame)
-        J = pin.getFrameJacobian(model.pin_model, self._sync(), fid, reference)
+        data = model._data if model._owner is self else self._sync()
+        J = pin.getFrameJacobian(model.pin_model, data, fid, reference)
         if model._select is not None:
             J = J[:, model._select]
-        J.flags.writeable = False
+        J.setflags(write=False)
         self._jacobians[(frame, axes)] = J
         return J
 
@@ -206,7 +207,7 @@ class State:
                 pin.computeJointJacobians(arm, data, self.q[m.nq_vehicle :])
                 m._arm_owner = self
             Ja = pin.getFrameJacobian(arm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        Ja.flags.writeable = False
+        Ja.setflags(write=False)
         self._arm[frame] = Ja
         return Ja
 
