@@ -177,6 +177,10 @@ def test_bad_dh_tables():
         Model.from_dh([DHRow(name="tool")])
     with pytest.raises(ShapeError, match="joint_lower: expected length 1"):
         Model.from_dh([DHRow()], joint_lower=[0.0, 1.0])
+    with pytest.raises(ModelError, match="home angle of joint 'joint1' is outside limits"):
+        Model.from_dh([DHRow(lower=-1.0, upper=1.0)], home=[1.5])
+    with pytest.raises(ModelError, match="joint 'joint2' has lower limit > upper limit"):
+        Model.from_dh([DHRow(), DHRow()], joint_lower=[0.0, 2.0], joint_upper=[1.0, 1.0])
 
 
 def test_bad_mounts_and_vehicles():

@@ -195,6 +195,14 @@ class Model:
             self._home_joints = np.clip(0.0, self.joint_lower, self.joint_upper)
         else:
             self._home_joints = self._check_joints(home, "home")
+            outside = np.flatnonzero(
+                (self._home_joints < self.joint_lower) | (self._home_joints > self.joint_upper)
+            )
+            if outside.size:
+                j = self.joint_names[int(outside[0])]
+                raise ModelError(
+                    f"model {self.name!r}: home angle of joint {j!r} is outside limits"
+                )
 
     # --- constructors --------------------------------------------------------------------
 
