@@ -457,8 +457,8 @@ def _tracking_task(top: Table, tasks: dict[str, tuple[Any, Table]]) -> str | Non
                 f"unknown task {name!r}; known tasks: {', '.join(tasks)}", top.at("tracking")
             )
         return name
-    for task_name, (_task, table) in tasks.items():
-        if "trajectory" in table.data or "target" in table.data:
+    for task_name, (task, _table) in tasks.items():
+        if callable(getattr(task, "target", None)) and hasattr(task, "frame"):
             return task_name
     return None
 

@@ -1,0 +1,237 @@
+"""Scenario files: every invalid field is a ConfigError whose message starts with its path.
+
+Also the command line: an invalid file exits non-zero with that message, no traceback, and no
+results file.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from uvms_qp.cli import main
+from uvms_qp.errors import ConfigError
+from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
+from uvms_qp.tasks import TASK_TYPES
+
+BASE = """
+model = "bluerov2_heavy_alpha5"
+dt = 0.1
+duration = 1.0
+
+[initial]
+joints = [3.14159, 1.2, 1.7, 3.14159]
+
+[current]
+direction = 0.2
+
+[trajectories.path]
+type = "quintic"
+start = [0.49, 0.10, -0.17]
+goal = [0.45, 0.15, -0.14]
+duration = 1.0
+
+[[constraints]]
+type = "joint_velocity_bounds"
+
+[[levels]]
+[[levels.tasks]]
+type = "end_effector"
+name = "tool"
+trajectory = "path"
+gain = 1.0
+
+[[levels]]
+[[levels.tasks]]
+type = "manipulability"
+mode = "floor"
+minimum = 0.001
+gain = 1.0
+
+[[levels.tasks]]
+type = "payload_moment"
+name = "payload"
+mode = "bound"
+maximum = 0.5
+
+[[levels.tasks]]
+type = "current_alignment"
+heading = "current"
+
+[[events]]
+time = 0.5
+task = "payload"
+update = { force = 10.0 }
+"""
+
+
+def load_text(text: str):
+    return scenario_from_dict(tomllib.loads(text))
+
+
+def test_the_base_scenario_is_valid():
+    scenario = load_text(BASE)
+    assert scenario.steps == 10
+    assert scenario.tracking == "tool"
+    assert scenario.events[0].update == {"force": 10.0}
+    assert scenario.task("current_alignment").heading == pytest.approx(0.2)
+
+
+# (old text, new text, expected path, fragment of the message)
+CASES = [
+    # unknown keys
+    ("dt = 0.1", "dt = 0.1\ndtt = 0.2", "dtt", "unknown key 'dtt'"),
+    ("gain = 1.0\n\n[[levels]]", "gian = 1.0\n\n[[levels]]", "levels[0].tasks[0].gian",
+     "unknown key 'gian' for task type 'end_effector'; known keys:"),
+    ("direction = 0.2", "direction = 0.2\nspeeed = 1", "current.speeed", "unknown key"),
+    ('type = "joint_velocity_bounds"', 'type = "joint_velocity_bounds"\nfoo = 1',
+     "constraints[0].foo", "unknown key 'foo'"),
+    ("duration = 1.0\n\n[[constraints]]", "duration = 1.0\nspeed = 2\n\n[[constraints]]",
+     "trajectories.path.speed", "unknown key 'speed'"),
+    ("update = { force = 10.0 }", "update = { mass = 10.0 }", "events[0].update.mass",
+     "unknown parameter 'mass' of task 'payload'"),
+    # unknown names
+    ('type = "end_effector"', 'type = "end_efector"', "levels[0].tasks[0].type",
+     "unknown task type 'end_efector'; known task types: " + ", ".join(sorted(TASK_TYPES))),
+    ('type = "joint_velocity_bounds"', 'type = "joint_speed"', "constraints[0].type",
+     "unknown constraint type 'joint_speed'; known constraint types:"),
+    ('type = "quintic"', 'type = "spline"', "trajectories.path.type",
+     "unknown trajectory type 'spline'; known trajectory types: circle, fixed, line, quintic"),
+    ('trajectory = "path"', 'trajectory = "paht"', "levels[0].tasks[0].trajectory",
+     "unknown trajectory 'paht'; known trajectories: path"),
+    ('name = "tool"', 'name = "tool"\nframe = "ee2"', "levels[0].tasks[0].frame",
+     "unknown frame 'ee2'; known frames: world, vehicle, arm_base, tool"),
+    ('model = "bluerov2_heavy_alpha5"', 'model = "bluerov3"', "model",
+     "unknown model 'bluerov3'; bundled models:"),
+    ("dt = 0.1", 'dt = 0.1\nsolver = "gurobi"', "solver", "unknown or unavailable solver"),
+    ('task = "payload"', 'task = "cargo"', "events[0].task", "unknown task 'cargo'"),
+    # missing fields
+    ('model = "bluerov2_heavy_alpha5"', "", "model", "missing required field 'model'"),
+    ("duration = 1.0\n\n[initial]", "\n[initial]", "duration", "missing required field"),
+    ('type = "end_effector"\n', "", "levels[0].tasks[0]", "missing required field 'type'"),
+    ("goal = [0.45, 0.15, -0.14]\n", "", "trajectories.path", "missing required field 'goal'"),
+    ("minimum = 0.001\n", "", "levels[1].tasks[0].minimum", "required in mode 'floor'"),
+    ("update = { force = 10.0 }", "", "events[0]", "missing required field 'update'"),
+    # wrong types
+    ("dt = 0.1", 'dt = "fast"', "dt", "expected a positive number, got a string"),
+    ("gain = 1.0\n\n[[levels]]", 'gain = "high"\n\n[[levels]]', "levels[0].tasks[0].gain",
+     "expected"),
+    ('mode = "floor"', "mode = 3", "levels[1].tasks[0].mode",
+     "expected one of 'ascend', 'floor', 'shaping', got 3"),
+    ("goal = [0.45, 0.15, -0.14]", 'goal = [0.45, "x", -0.14]', "trajectories.path.goal[1]",
+     "expected a number, got a string"),
+    ("joints = [3.14159, 1.2, 1.7, 3.14159]", "joints = 3.0", "initial.joints",
+     "expected an array of numbers"),
+    ("update = { force = 10.0 }", 'update = { force = "heavy" }', "events[0].update.force",
+     "expected a number"),
+    # out-of-range values
+    ("dt = 0.1", "dt = 0.0", "dt", "expected a positive number, got 0.0"),
+    ("duration = 1.0\n\n[initial]", "duration = -1.0\n\n[initial]", "duration",
+     "expected a positive number"),
+    ("minimum = 0.001\ngain = 1.0", "minimum = 0.001\ngain = -1.0", "levels[1].tasks[0].gain",
+     "expected a positive number, got -1.0"),
+    ("joints = [3.14159, 1.2, 1.7, 3.14159]", "joints = [3.14159, 1.2, 4.0, 3.14159]",
+     "initial.joints[2]", "outside the limits of joint 'axis_c'"),
+    ("joints = [3.14159, 1.2, 1.7, 3.14159]", "joints = [3.14159, 1.2, 1.7]", "initial.joints",
+     "expected 4 numbers, got 3"),
+    ("direction = 0.2", "direction = 0.2\ndrift = 1.5", "current.drift",
+     "expected a value <= 1, got 1.5"),
+    ("time = 0.5", "time = 5.0", "events[0].time", "expected a value <= 1, got 5.0"),
+    ("update = { force = 10.0 }", "update = { force = -10.0 }", "events[0].update.force",
+     "expected a non-negative number"),
+    ("dt = 0.1", "dt = 0.1\nmetric = [1, 1, 1, 1, 1, 1, 1, 1, 1, 0]", "metric[9]",
+     "expected a positive weight"),
+    ("dt = 0.1", "dt = 0.1\nmetric = [1, 1]", "metric", "expected 10 numbers, got 2"),
+    ("dt = 0.1\nduration = 1.0", "dt = 1e-6\nduration = 1e6", "duration", "steps; at most"),
+    ("duration = 1.0\n\n[[constraints]]", "duration = 0.0\n\n[[constraints]]",
+     "trajectories.path.duration", "expected a positive number"),
+    # structure
+    ('name = "payload"', 'name = "tool"', "levels[1].tasks[1].name", "duplicate task name 'tool'"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "path", "fragment"), CASES)
+def test_invalid_field_is_reported_with_its_path(old, new, path, fragment):
+    assert old in BASE, old
+    text = BASE.replace(old, new, 1)
+    with pytest.raises(ConfigError) as info:
+        load_text(text)
+    assert info.value.path == path, str(info.value)
+    assert str(info.value).startswith(f"{path}: ")
+    assert fragment in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("edit", "path", "fragment"),
+    [
+        (lambda d: d.__setitem__("levels", 3), "levels", "expected an array of tables"),
+        (lambda d: d.__setitem__("levels", []), "levels", "expected at least one level"),
+        (lambda d: d["levels"][1].__setitem__("tasks", []), "levels[1].tasks",
+         "expected at least one task"),
+        (lambda d: d["levels"][0].__setitem__("weight", 2.0), "levels[0].weight",
+         "unknown key 'weight'"),
+        (lambda d: d.__setitem__("initial", [1, 2]), "initial", "expected a table"),
+    ],
+)
+def test_invalid_structure(edit, path, fragment):
+    data = tomllib.loads(BASE)
+    edit(data)
+    with pytest.raises(ConfigError) as info:
+        scenario_from_dict(data)
+    assert info.value.path == path, str(info.value)
+    assert fragment in str(info.value)
+
+
+def test_heading_from_current_needs_a_current():
+    text = BASE.replace("[current]\ndirection = 0.2\n", "")
+    with pytest.raises(ConfigError, match=r"^levels\[1\]\.tasks\[2\]\.heading: 'current' needs"):
+        load_text(text)
+
+
+def test_malformed_toml_names_file_line_and_column(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(BASE.replace("dt = 0.1", "dt = "))
+    with pytest.raises(ConfigError, match=r"bad\.toml: malformed TOML: .*line 3"):
+        load_scenario(bad)
+
+
+def test_missing_file_and_unknown_bundled_name(tmp_path):
+    with pytest.raises(ConfigError, match="scenario file not found"):
+        load_scenario(tmp_path / "nothing.toml")
+    with pytest.raises(ConfigError, match=r"bundled scenarios: .*bluerov2_demo"):
+        load_scenario("no_such_scenario")
+
+
+@pytest.fixture
+def bad_file(tmp_path) -> Path:
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE.replace("minimum = 0.001\ngain = 1.0", "minimum = 0.001\ngain = -1.0"))
+    return path
+
+
+def test_cli_rejects_invalid_scenario_without_writing(bad_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["run", str(bad_file), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code != 0
+    assert "levels[1].tasks[0].gain: expected a positive number" in captured.err
+    assert "Traceback" not in captured.err + captured.out
+    assert not (out / "results.json").exists()
+
+
+def test_cli_subprocess_exit_status_and_no_traceback(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("model = [")
+    out = tmp_path / "out"
+    proc = subprocess.run(
+        [sys.executable, "-m", "uvms_qp", "run", str(bad), "--out", str(out)],
+        capture_output=True, text=True, timeout=120, check=False,
+    )
+    assert proc.returncode == 2
+    assert "malformed TOML" in proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert not (out / "results.json").exists()
