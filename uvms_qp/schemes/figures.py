@@ -115,14 +115,18 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
     ax2.set_xlabel("t [s]")
     paths.append(_save(fig, directory / "manipulability_tracking.png"))
 
-    diagnostics = [(run, key) for run in runs for key in run.info if key != "manipulability"]
-    if diagnostics:
-        fig, ax = plt.subplots(figsize=(7, 3))
-        for run, key in diagnostics:
-            ax.plot(run.result.time, run.info[key], label=f"{run.name}: {key}")
-        ax.set_title(f"{title}: scheme diagnostics")
-        ax.set_xlabel("t [s]")
-        ax.legend(fontsize=6, ncol=2)
+    keys = sorted({key for run in runs for key in run.info if key != "manipulability"})
+    if keys:
+        fig, axes = plt.subplots(len(keys), 1, figsize=(7, 1.5 * len(keys) + 0.6), sharex=True,
+                                 squeeze=False)
+        for ax, key in zip(axes[:, 0], keys, strict=True):
+            for run in runs:
+                if key in run.info:
+                    ax.plot(run.result.time, run.info[key], label=run.name)
+            ax.set_ylabel(key, fontsize=7)
+        axes[0, 0].set_title(f"{title}: scheme diagnostics")
+        axes[0, 0].legend(fontsize=7)
+        axes[-1, 0].set_xlabel("t [s]")
         paths.append(_save(fig, directory / "scheme_diagnostics.png"))
 
     if model.vehicle_kind == "planar":
