@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
-from ..errors import ConfigError, UnknownNameError, UvmsQpError
+from ..errors import ConfigError, InputError, UnknownNameError, UvmsQpError
 from .config import (
     NOT_HANDLED,
     Table,
@@ -148,8 +148,92 @@ class Scenario:
             self.model, self.stack, solver=solver or self.solver, dt=self.dt, metric=self.metric
         )
 
+    @classmethod
+    def build(
+        cls,
+        model: Any,
+        stack: Any,
+        q0: Any,
+        *,
+        dt: float,
+        duration: float,
+        solver: str = "daqp",
+        metric: Any = None,
+        events: list[Event] | None = None,
+        current: ConstantCurrent | None = None,
+        integrator: Integrator | None = None,
+        trajectories: dict[str, Trajectory] | None = None,
+        phases: list[Phase] | None = None,
+        tracking: str | None = None,
+        name: str = "custom",
+        description: str = "",
+    ) -> Scenario:
+        """Assemble a scenario in code (no file): the stack is bound to ``model`` here.
+
+        Args:
+            model: The model.
+            stack: A :class:`~uvms_qp.stack.Stack`.
+            q0: Initial configuration (nq,) (checked by ``model.check_configuration``).
+            dt: Control period [s].
+            duration: Simulated time [s].
+            solver: Solver name.
+            metric: Diagonal metric W (nv,) or None.
+            events: Run-time parameter changes.
+            current: Optional constant current.
+            integrator: Default: explicit Euler, passive attitude held, with ``current``.
+            trajectories: Named trajectories (informative; tasks hold their own).
+            phases: Time windows with their own metrics.
+            tracking: Task whose target is the tool reference of the metrics; default: the first
+                task with a ``target`` method and a ``frame``.
+            name: Scenario name.
+            description: Free text.
+
+        Raises:
+            InputError: invalid dt/duration/q0, or any error of the stack or controller.
+        """
+        from .._validation import as_scalar
+
+        dt = as_scalar(dt, "dt", positive=True)
+        duration = as_scalar(duration, "duration", positive=True)
+        q0 = np.asarray(model.check_configuration(q0), dtype=np.float64)
+        stack.bind(model)
+        scenario = cls(
+            name=name,
+            description=description,
+            model=model,
+            q0=q0,
+            stack=stack,
+            constraints=list(stack.constraints),
+            trajectories=dict(trajectories or {}),
+            solver=solver,
+            metric=None if metric is None else np.asarray(metric, dtype=np.float64),
+            dt=dt,
+            duration=duration,
+            events=sorted(events or [], key=lambda e: e.time),
+            current=current,
+            integrator=integrator or Integrator(model, current=current),
+            schemes=["hqp"],
+            tracking=tracking,
+            phases=list(phases or []),
+        )
+        if scenario.tracking is None:
+            for task in scenario.tasks():
+                if callable(getattr(task, "target", None)) and hasattr(task, "frame"):
+                    scenario.tracking = task.name
+                    break
+        for event in scenario.events:
+            scenario.task(event.task)  # raises on an unknown task name
+        scenario.make_controller()  # validates solver, metric and stack now
+        return scenario
+
     def rebuild(self) -> Scenario:
-        """Return a fresh scenario from the same data (new tasks, no event applied)."""
+        """Return a fresh scenario from the same data (new tasks, no event applied).
+
+        Raises:
+            InputError: the scenario was built in code (no file data to rebuild from).
+        """
+        if not self.data:
+            raise InputError(f"scenario {self.name!r} was built in code; it cannot be rebuilt")
         return scenario_from_dict(self.data, source=self.source, name=self.name)
 
 
@@ -434,6 +518,25 @@ def _build_phases(top: Table, duration: float) -> list[Phase]:
     return phases
 
 
+def _check_schemes(top: Table) -> list[str]:
+    schemes = top.take_strs("schemes", ["hqp"]) or ["hqp"]
+    try:
+        from ..schemes import SCHEME_TYPES
+    except ImportError:  # closed-form schemes not installed: names are checked when built
+        known = None
+    else:
+        known = ["hqp", *SCHEME_TYPES]
+    for i, name in enumerate(schemes):
+        if known is not None and name not in known:
+            raise ConfigError(
+                f"unknown scheme {name!r}; known schemes: {', '.join(known)}",
+                join(top.at("schemes"), i),
+            )
+        if name in schemes[:i]:
+            raise ConfigError(f"scheme {name!r} listed twice", join(top.at("schemes"), i))
+    return schemes if "hqp" in schemes else ["hqp", *schemes]
+
+
 def _check_solver(table: Table) -> str:
     solver = str(table.take_str("solver", "daqp"))
     try:
@@ -507,9 +610,7 @@ def scenario_from_dict(
         if np.any(metric <= 0.0):
             i = int(np.flatnonzero(metric <= 0.0)[0])
             raise ConfigError(f"expected a positive weight, got {metric[i]:g}", f"metric[{i}]")
-    schemes = top.take_strs("schemes", ["hqp"]) or ["hqp"]
-    if "hqp" not in schemes:
-        schemes = ["hqp", *schemes]
+    schemes = _check_schemes(top)
     method = top.take_str("integrator", "euler", choices=("euler", "rk4"))
     q0 = _initial_configuration(top.take_table("initial"), model)
     current = _build_current(top.take_table("current"))
