@@ -129,7 +129,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
         axes[-1, 0].set_xlabel("t [s]")
         paths.append(_save(fig, directory / "scheme_diagnostics.png"))
 
-    if model.vehicle_kind == "planar":
+    if model.vehicle_kind in ("planar", "spatial"):
         paths.append(_snapshots(plt, comparison, model, directory / "configurations.png"))
     return paths
 
@@ -140,9 +140,17 @@ def _chain_frames(model: Any) -> list[str]:
 
 
 def _snapshots(plt: Any, comparison: Comparison, model: Any, path: Path) -> Path:
-    """Planar configurations at evenly spaced times, one panel per scheme (Fig. 3/6 of 000)."""
+    """Configurations at evenly spaced times, one panel per scheme.
+
+    Planar models are drawn from above (``000``, Fig. 3/6); spatial ones from the side, in the
+    world x-z plane with z down (``003``, Fig. 2/4/6).
+    """
     runs = comparison.runs
     frames = _chain_frames(model)
+    planar = model.vehicle_kind == "planar"
+    # (horizontal axis index, vertical axis index, labels, flip vertical)
+    h, v = (1, 0) if planar else (0, 2)
+    xlabel, ylabel = ("y (east) [m]", "x (north) [m]") if planar else ("x [m]", "z (down) [m]")
     fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 4.2), squeeze=False)
     for ax, run in zip(axes[0], runs, strict=True):
         r = run.result
@@ -150,14 +158,16 @@ def _snapshots(plt: Any, comparison: Comparison, model: Any, path: Path) -> Path
         shades = np.linspace(0.25, 1.0, picks.size)
         for shade, k in zip(shades, picks, strict=True):
             state = model.state(r.q[k])
-            pts = np.array([state.position(f)[:2] for f in frames])
-            ax.plot(pts[:, 1], pts[:, 0], "-o", color=(0.1, 0.3, 0.8, shade), markersize=2.5)
-            ax.plot(pts[:2, 1], pts[:2, 0], "-", color=(0.8, 0.3, 0.1, shade), linewidth=3)
+            pts = np.array([state.position(f) for f in frames])
+            ax.plot(pts[:, h], pts[:, v], "-o", color=(0.1, 0.3, 0.8, shade), markersize=2.5)
+            ax.plot(pts[:2, h], pts[:2, v], "-", color=(0.8, 0.3, 0.1, shade), linewidth=3)
         target = r.target_position
-        ax.plot(target[:, 1], target[:, 0], "k:", linewidth=0.8)
+        ax.plot(target[:, h], target[:, v], "k:", linewidth=0.8)
         ax.set_title(run.name, fontsize=9)
-        ax.set_xlabel("y (east) [m]")
-        ax.set_ylabel("x (north) [m]")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        if not planar:
+            ax.invert_yaxis()
         ax.set_aspect("equal")
     fig.suptitle(f"{comparison.scenario}: configurations (vehicle red, arm blue, later darker)")
     return _save(fig, path)
