@@ -253,7 +253,9 @@ def keyword_parameters(cls: type) -> dict[str, inspect.Parameter]:
 
 def parameter_hints(cls: type) -> dict[str, Any]:
     """Resolved type hints of ``cls``'s constructor parameters (unresolvable ones are omitted)."""
-    init = cls.__init__
+    init = vars(cls).get("__init__") or next(
+        vars(base)["__init__"] for base in cls.__mro__ if "__init__" in vars(base)
+    )
     try:
         return typing.get_type_hints(init)
     except Exception:  # a forward reference that cannot be resolved: go one by one

@@ -25,6 +25,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .._validation import FloatArray
 from .current import wrap_angle
@@ -74,7 +75,9 @@ def yaw_errors(result: SimulationResult) -> FloatArray | None:
     return np.array([wrap_angle(float(y) - result.heading) for y in result.yaw])
 
 
-def _window_metrics(result: SimulationResult, mask: FloatArray, origin: int) -> dict[str, Any]:
+def _window_metrics(
+    result: SimulationResult, mask: NDArray[np.bool_], origin: int
+) -> dict[str, Any]:
     """Metrics of the states selected by ``mask``; displacement measured from state ``origin``."""
     errors = ee_errors(result)[mask]
     vehicle = result.vehicle_position

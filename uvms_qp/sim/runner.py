@@ -226,8 +226,8 @@ def simulate(
     constraints = list(scenario.constraints)
     n_lin = sum(1 for dof in getattr(model, "actuated", ()) if dof in ("u", "v", "w"))
 
-    time = np.arange(n) * dt
-    time_states = np.arange(n + 1) * dt
+    time: FloatArray = np.arange(n, dtype=np.float64) * dt
+    time_states: FloatArray = np.arange(n + 1, dtype=np.float64) * dt
     zeta_log = np.zeros((n, nv))
     lower_log = np.full((n, nv), -np.inf)
     upper_log = np.full((n, nv), np.inf)

@@ -309,7 +309,7 @@ def _lookup_type(table: Table, registry: Mapping[str, type], kind: str) -> type:
 def _load_model(table: Table) -> Any:
     from ..model import bundled_models, load_model
 
-    name = table.take_str("model", required=True)
+    name = str(table.take_str("model", required=True))
     try:
         return load_model(name)
     except UnknownNameError as exc:

@@ -164,8 +164,8 @@ class SegmentTrajectory(Trajectory):
 
     def __init__(
         self,
-        start: Sequence[float],
-        goal: Sequence[float],
+        start: Sequence[float] | FloatArray,
+        goal: Sequence[float] | FloatArray,
         duration: float,
         start_rotation: Any = None,
         goal_rotation: Any = None,
