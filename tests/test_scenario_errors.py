@@ -116,6 +116,7 @@ CASES = [
     ("goal = [0.45, 0.15, -0.14]\n", "", "trajectories.path", "missing required field 'goal'"),
     ("minimum = 0.001\n", "", "levels[1].tasks[0].minimum", "required in mode 'floor'"),
     ("update = { force = 10.0 }", "", "events[0]", "missing required field 'update'"),
+    ('trajectory = "path"\n', "", "levels[0].tasks[0]", "task 'tool' has no target"),
     # wrong types
     ("dt = 0.1", 'dt = "fast"', "dt", "expected a positive number, got a string"),
     ("gain = 1.0\n\n[[levels]]", 'gain = "high"\n\n[[levels]]', "levels[0].tasks[0].gain",

@@ -9,7 +9,8 @@ scenario phase), ``events`` (applied run-time changes) and ``series``:
   ``target_position`` [m], ``manipulability``, ``payload_moment`` (when set);
 - per step (N entries, at ``time[:N]``): ``zeta`` [m/s, rad/s] (names in ``zeta_names``),
   ``zeta_lower``/``zeta_upper`` (hard box, ``null`` = unbounded), ``step_time_us``, ``status``,
-  ``level_residuals``, ``bound_violation``.
+  ``level_residuals``, ``bound_violation``, ``task_residuals`` (by task name, units in
+  ``task_units``).
 
 Non-finite numbers are written as ``null`` (strict JSON). The file is written atomically (a
 temporary file renamed into place), so a failed run never leaves a partial ``results.json``.
@@ -92,6 +93,8 @@ def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, 
             "status": result.status,
             "level_residuals": result.level_residuals,
             "bound_violation": result.bound_violation,
+            "task_residuals": result.task_residuals,
+            "task_units": result.task_units,
         }
         if result.payload_moment is not None:
             record["payload_moment"] = result.payload_moment

@@ -64,8 +64,8 @@ class SimulationResult:
         step_time: Controller step wall time (N,) [s].
         status: Controller status per step.
         level_residuals: Per-level residual norms (N, levels) (NaN where not reported).
-        task_residuals: Per-task residual norm series (N,) by task name.
-        task_units: Unit of each task residual.
+        task_residuals: Per-task row-violation norm series (N,) by task name.
+        task_units: Unit of each task's rows (the residual's unit).
         bound_violation: Largest hard-row violation of each command (N,).
         nan_steps: Number of non-finite commands.
         joint_lower: Joint lower limits (n_joints,) [rad].
@@ -238,7 +238,7 @@ def simulate(
     task_names = [task.name for task in scenario.tasks()]
     task_res = {name: np.full(n, np.nan) for name in task_names}
     task_units: dict[str, str] = {
-        task.name: str(getattr(task, "error_unit", "")) for task in scenario.tasks()
+        task.name: str(getattr(task, "rate_unit", "")) for task in scenario.tasks()
     }
     violation = np.zeros(n)
     speed = np.zeros(n)
@@ -278,7 +278,11 @@ def simulate(
             level_res[k, :count] = residuals[:count]
         for name, value in (getattr(result, "task_residuals", None) or {}).items():
             if name in task_res:
-                task_res[name][k] = float(value[0] if isinstance(value, tuple) else value)
+                if isinstance(value, tuple):
+                    task_res[name][k] = float(value[0])
+                    task_units[name] = str(value[1])
+                else:
+                    task_res[name][k] = float(value)
         violation[k] = _constraint_violation(
             constraints, state, dt, zeta, lower_log[k], upper_log[k]
         )

@@ -428,6 +428,12 @@ def _build_levels(
                     task_table.at("name"),
                 )
             _bind(task, model, task_table, raw)
+            if getattr(task, "has_target", True) is False:
+                raise ConfigError(
+                    f"task {task.name!r} has no target: give it a 'trajectory' or a fixed target "
+                    "(e.g. 'position')",
+                    task_table.path,
+                )
             by_name[task.name] = (task, task_table)
             tasks.append(task)
         levels.append(tasks)
