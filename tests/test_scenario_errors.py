@@ -1,20 +1,26 @@
 """Scenario files: every invalid field is a ConfigError whose message starts with its path.
 
 Also the command line: an invalid file exits non-zero with that message, no traceback, and no
-results file.
+results file. And a property: any single-field corruption of a valid scenario either loads (and
+then runs safely) or raises ConfigError; no other exception escapes the loader.
 """
 
 from __future__ import annotations
 
+import copy
+import math
 import subprocess
 import sys
 import tomllib
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from uvms_qp.cli import main
 from uvms_qp.errors import ConfigError
+from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
 from uvms_qp.tasks import TASK_TYPES
 
@@ -187,6 +193,13 @@ def test_invalid_structure(edit, path, fragment):
     assert fragment in str(info.value)
 
 
+def test_task_that_cannot_be_evaluated_is_caught_at_load_time():
+    # a current-alignment task with neither a heading nor a direction
+    text = BASE.replace('heading = "current"\n', "")
+    with pytest.raises(ConfigError, match=r"^levels\[1\]\.tasks\[2\]: .*heading never set"):
+        load_text(text)
+
+
 def test_heading_from_current_needs_a_current():
     text = BASE.replace("[current]\ndirection = 0.2\n", "")
     with pytest.raises(ConfigError, match=r"^levels\[1\]\.tasks\[2\]\.heading: 'current' needs"):
@@ -236,3 +249,47 @@ def test_cli_subprocess_exit_status_and_no_traceback(tmp_path):
     assert "malformed TOML" in proc.stderr
     assert "Traceback" not in proc.stderr
     assert not (out / "results.json").exists()
+
+
+# ---- property: corrupt one field at a time
+
+DATA = tomllib.loads(BASE)
+
+
+def _leaves(node, path=()):
+    if isinstance(node, dict):
+        for key, value in node.items():
+            yield (*path, key)
+            yield from _leaves(value, (*path, key))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield (*path, i)
+            yield from _leaves(value, (*path, i))
+
+
+PATHS = list(_leaves(DATA))
+BAD_VALUES = st.sampled_from(
+    ["x", "", -1, 0, -1.5, 1e9, math.nan, math.inf, -math.inf, True, [], [1, "a"], [[1.0]],
+     {}, {"a": 1}, [0.1, 0.2, 0.3], "current", "tool", "DELETE"]
+)
+
+
+@settings(max_examples=150)
+@given(st.sampled_from(PATHS), BAD_VALUES)
+def test_corrupted_field_loads_or_raises_config_error(path, value):
+    data = copy.deepcopy(DATA)
+    parent = data
+    for key in path[:-1]:
+        parent = parent[key]
+    if value == "DELETE":
+        del parent[path[-1]]
+    else:
+        parent[path[-1]] = value
+    try:
+        scenario = scenario_from_dict(data)
+    except ConfigError:
+        return
+    result = simulate(scenario, duration=3 * scenario.dt)
+    metrics = result.metrics()
+    assert metrics["nan_steps"] == 0
+    assert metrics["bound_violation_max"] <= 1e-7

@@ -21,6 +21,7 @@ _LAZY: dict[str, str] = {
     "Integrator": ".integrators",
     "Scenario": ".scenario",
     "Event": ".scenario",
+    "Phase": ".scenario",
     "load_scenario": ".scenario",
     "bundled_scenarios": ".scenario",
     "simulate": ".runner",

@@ -403,8 +403,30 @@ def _bind(obj: Any, model: Any, table: Table, kwargs_source: Mapping[str, Any]) 
         raise config_error_from(exc, table.path, parameters, kwargs_source) from exc
 
 
+def _dry_run_rows(
+    cls: type, task_table: Table, resolver: _TaskResolver, model: Any, state: Any
+) -> None:
+    """Evaluate a scratch copy of a task once at the initial state.
+
+    Catches what only shows when a task is evaluated (e.g. a heading never set) without touching
+    the run-time state of the real task.
+    """
+    scratch = construct(cls, Table(dict(task_table.data), task_table.path), resolver=resolver,
+                        kind="task")
+    raw = dict(task_table.data)
+    _bind(scratch, model, task_table, raw)
+    try:
+        scratch.rows(state, 0.0)
+    except (UvmsQpError, ValueError) as exc:
+        raise config_error_from(exc, task_table.path, list(keyword_parameters(cls)), raw) from exc
+
+
 def _build_levels(
-    top: Table, model: Any, task_types: Mapping[str, type], resolver: _TaskResolver
+    top: Table,
+    model: Any,
+    task_types: Mapping[str, type],
+    resolver: _TaskResolver,
+    state: Any = None,
 ) -> tuple[list[list[Any]], dict[str, tuple[Any, Table]]]:
     levels: list[list[Any]] = []
     by_name: dict[str, tuple[Any, Table]] = {}
@@ -434,6 +456,8 @@ def _build_levels(
                     "(e.g. 'position')",
                     task_table.path,
                 )
+            if state is not None and callable(getattr(task, "rows", None)):
+                _dry_run_rows(cls, task_table, resolver, model, state)
             by_name[task.name] = (task, task_table)
             tasks.append(task)
         levels.append(tasks)
@@ -638,7 +662,7 @@ def scenario_from_dict(
             )
     resolver = _TaskResolver(trajectories, current)
     constraints = _build_constraints(top, model, constraint_types)
-    levels, tasks = _build_levels(top, model, task_types, resolver)
+    levels, tasks = _build_levels(top, model, task_types, resolver, model.state(q0))
     events = _build_events(top, duration, tasks, resolver)
     tracking = _tracking_task(top, tasks)
     phases = _build_phases(top, duration)
