@@ -34,6 +34,12 @@ class SolverSpec:
         freeze_margin: Absolute margin added to frozen inequality slacks of higher levels.
         settings: Keyword settings passed to the back-end (qpsolvers or DAQP).
         sparse: The back-end takes sparse (CSC) matrices only; the cascade converts for it.
+        reg: Relative Tikhonov term ``rho`` a cascade adds to each level's Hessian (0 for
+            back-ends that accept positive semi-definite Hessians).
+        retries: Alternative back-end settings tried, in order, when a QP fails (e.g. looser
+            tolerances for an interior-point method that calls a thin feasible set infeasible).
+        prox_steps: Proximal refinements ``min f + rho/2 |y - y_j|^2`` after the first QP of a
+            level, each shrinking the bias of ``rho`` by a factor ``rho / sigma_min^2``.
     """
 
     name: str
@@ -49,6 +55,9 @@ class SolverSpec:
     freeze_margin: float = 1e-9
     settings: MappingProxyType[str, Any] = field(default_factory=lambda: MappingProxyType({}))
     sparse: bool = False
+    reg: float = 0.0
+    prox_steps: int = 0
+    retries: tuple[MappingProxyType[str, Any], ...] = ()
 
     @property
     def qp_name(self) -> str:
@@ -62,7 +71,9 @@ class SolverSpec:
 
 
 def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: float,
-             freeze_margin: float, sparse: bool = False, **settings: Any) -> SolverSpec:
+             freeze_margin: float, sparse: bool = False, reg: float = 0.0,
+             prox_steps: int = 0, retries: tuple[dict[str, Any], ...] = (),
+             **settings: Any) -> SolverSpec:
     return SolverSpec(
         name=f"cascade:{name}",
         kind="cascade",
@@ -73,6 +84,9 @@ def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: fl
         freeze_margin=freeze_margin,
         settings=MappingProxyType({"verbose": False, **settings}),
         sparse=sparse,
+        reg=reg,
+        prox_steps=prox_steps,
+        retries=tuple(MappingProxyType(r) for r in retries),
     )
 
 
@@ -83,9 +97,10 @@ SOLVERS: tuple[SolverSpec, ...] = (
         kind="daqp",
         modules=("daqp",),
         pip="daqp",
-        exact=False,  # soft-row regularisation rho_soft biases results by about rho_soft * 1e3
+        exact=False,  # the soft-row regularisation rho_soft leaves errors of about 1e-9..1e-7
         agreement_tol=1e-6,
-        settings=MappingProxyType({"rho_soft": 1e-10, "primal_tol": 1e-10}),
+        settings=MappingProxyType({"rho_soft": 1e-8, "primal_tol": 1e-10,
+                                   "rho_ladder": (1e-10, 1e-6, 1e-9, 1e-7, 1e-11)}),
     ),
     SolverSpec(
         name="nullspace",
@@ -96,21 +111,25 @@ SOLVERS: tuple[SolverSpec, ...] = (
         bounds=False,
         agreement_tol=1e-10,
     ),
+    # quadprog needs a positive definite Hessian: regularise and refine proximally
     _cascade("quadprog", "quadprog", "quadprog", exact=True, agreement_tol=1e-8,
-             freeze_margin=1e-10),
+             freeze_margin=1e-10, reg=1e-7, prox_steps=4),
     _cascade("daqp", "daqp", "daqp", exact=True, agreement_tol=1e-8, freeze_margin=1e-10,
-             primal_tol=1e-10),
+             reg=1e-7, prox_steps=4, primal_tol=1e-10, eps_prox=0.0),
     _cascade("proxqp", "proxsuite", "proxsuite", exact=False, agreement_tol=1e-6,
-             freeze_margin=1e-8, eps_abs=1e-10, eps_rel=0.0, max_iter=10_000),
+             freeze_margin=1e-8, eps_abs=1e-10, eps_rel=0.0, max_iter=10_000,
+             retries=({"primal_infeasibility_solving": True},
+                      {"eps_abs": 1e-8, "primal_infeasibility_solving": True})),
     _cascade("piqp", "piqp", "piqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-8,
-             eps_abs=1e-10, eps_rel=1e-12),
+             eps_abs=1e-10, eps_rel=1e-12, retries=({"eps_abs": 1e-9}, {"eps_abs": 1e-8})),
     _cascade("clarabel", "clarabel", "clarabel", exact=False, agreement_tol=1e-6,
              freeze_margin=1e-8, sparse=True, tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10),
-    _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-6, freeze_margin=1e-8,
-             sparse=True),
-    _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-4, freeze_margin=1e-6,
+    _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-4, freeze_margin=1e-8,
+             sparse=True, qp_regularization_value=1e-11, primal_feasibility_tolerance=1e-10,
+             dual_feasibility_tolerance=1e-10),
+    _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-6,
              sparse=True,
-             eps_abs=1e-9, eps_rel=1e-9, max_iter=200_000, polish=False),
+             eps_abs=1e-8, eps_rel=1e-8, max_iter=20_000, polishing=True),
 )
 
 _BY_NAME = {spec.name: spec for spec in SOLVERS}

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..._validation import FloatArray
-from ..evaluate import hard_scale, hard_violation
+from ..evaluate import hard_feasible, hard_scale, hard_violation, polish_hard
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
@@ -44,20 +44,39 @@ def _null_space(M: FloatArray, rtol: float) -> tuple[FloatArray, int]:
 class _Rows:
     """Accumulates inequality rows ``lo <= C z <= hi`` as qpsolvers' one-sided ``G z <= h``."""
 
-    def __init__(self, width: int) -> None:
+    def __init__(self, width: int, n: int) -> None:
         self.width = width
+        self.n = n
         self.G: list[FloatArray] = []
         self.h: list[FloatArray] = []
+        self.X: list[FloatArray] = []  # x-space row of each G row (zeros: not freezable)
 
-    def add(self, C: FloatArray, lo: FloatArray, hi: FloatArray) -> None:
+    def add(self, C: FloatArray, lo: FloatArray, hi: FloatArray, margin: float = 0.0,
+            X: FloatArray | None = None) -> None:
+        """Add rows; rows that vanish in the reduced space are constants and are dropped.
+
+        A row whose reduced coefficients are ~0 only restates that ``x_p`` satisfies it (true up to
+        round-off, since ``x_p`` is the previous answer); keeping it could turn a 1e-13 round-off
+        into an infeasible ``0 <= -1e-13``. ``margin`` loosens both sides.
+        """
+        live = np.abs(C).max(axis=1, initial=0.0) > 1e-12 if C.shape[1] else np.zeros(
+            C.shape[0], dtype=bool)
+        C, lo, hi = C[live], lo[live] - margin, hi[live] + margin
+        X = np.zeros((C.shape[0], self.n)) if X is None else X[live]
         up = np.isfinite(hi)
         dn = np.isfinite(lo)
         if up.any():
             self.G.append(C[up])
             self.h.append(hi[up])
+            self.X.append(X[up])
         if dn.any():
             self.G.append(-C[dn])
             self.h.append(-lo[dn])
+            self.X.append(X[dn])
+
+    def xrows(self) -> FloatArray:
+        """x-space rows of the G rows (zero rows for the level's own slack rows)."""
+        return np.vstack(self.X) if self.X else np.zeros((0, self.n))
 
     def arrays(self) -> tuple[FloatArray | None, FloatArray | None]:
         if not self.G:
@@ -81,36 +100,67 @@ class CascadeBackend:
         self._qpsolvers = qpsolvers
         self.spec = spec
         self.rank_tol = float(opts.pop("rank_tol", 1e-10))
-        self.reg = float(opts.pop("reg", 1e-10))
+        self.reg = float(opts.pop("reg", spec.reg))
+        self.prox_steps = int(opts.pop("prox_steps", spec.prox_steps))
+        self.mult_tol = float(opts.pop("mult_tol", 1e-7))
         self.settings = {**spec.settings, **opts}
 
     # -- one QP -------------------------------------------------------------------------------
     def _qp(self, P: FloatArray, q: FloatArray, rows: _Rows, lb: FloatArray | None,
-            ub: FloatArray | None) -> FloatArray | None:
+            ub: FloatArray | None, extra: Any = None) -> tuple[FloatArray | None, FloatArray]:
+        """Solve one QP; return ``z`` and the x-space rows of its strongly active constraints.
+
+        A constraint with a positive multiplier is active at *every* optimum of this QP
+        (complementary slackness holds between any primal and any dual optimum), so it can be
+        frozen as an equality for the lower levels without loss.
+        """
+        none = np.zeros((0, rows.n))
         G, h = rows.arrays()
         if G is None and lb is None and ub is None:
-            return np.linalg.lstsq(P, -q, rcond=None)[0]
+            return np.linalg.lstsq(P, -q, rcond=None)[0], none
+        Gs, Ps = G, P
         if self.spec.sparse:
             from scipy import sparse
 
-            P = sparse.csc_matrix(P)
-            G = sparse.csc_matrix(G) if G is not None else None
+            Ps = sparse.csc_matrix(P)
+            Gs = sparse.csc_matrix(G) if G is not None else None
         try:
-            z = self._qpsolvers.solve_qp(P, q, G, h, None, None, lb, ub,
-                                         solver=self.spec.qp_name, **self.settings)
+            problem = self._qpsolvers.Problem(Ps, q, Gs, h, None, None, lb, ub)
+            sol = self._qpsolvers.solve_problem(problem, solver=self.spec.qp_name,
+                                                **{**self.settings, **(extra or {})})
         except Exception:  # a back-end crash is a failed level, reported truthfully
-            return None
-        if z is None or not np.all(np.isfinite(z)):
-            return None
-        return np.asarray(z, dtype=np.float64)
+            return None, none
+        z = sol.x
+        if not sol.found or z is None or not np.all(np.isfinite(z)):
+            return None, none
+        z = np.asarray(z, dtype=np.float64)
+        if not self.spec.exact:
+            for act_tol in (1e-7, 1e-6, 1e-5):
+                zp = _polish_active_set(P, q, G, h, lb, ub, z, act_tol)
+                if zp is not z:
+                    z = zp
+                    break
+        active = [none]
+        if G is not None and sol.z is not None:
+            lam = np.asarray(sol.z, dtype=np.float64)
+            thr = self.mult_tol * max(1.0, float(np.abs(lam).max(initial=0.0)))
+            X = rows.xrows()
+            strong = (lam > thr) & (np.abs(X).max(axis=1, initial=0.0) > 0.0)
+            active.append(X[strong])
+        if lb is not None and sol.z_box is not None:
+            lam_b = np.abs(np.asarray(sol.z_box, dtype=np.float64))[: rows.n]
+            thr = self.mult_tol * max(1.0, float(lam_b.max(initial=0.0)))
+            active.append(np.eye(rows.n)[lam_b > thr])
+        return z, np.vstack(active)
 
     def _constraints(self, problem: Problem, xp: FloatArray, Z: FloatArray, width: int,
                      frozen: list[tuple[FloatArray, FloatArray, FloatArray]]
                      ) -> tuple[_Rows, FloatArray | None, FloatArray | None]:
         """Hard box, hard inequality rows and frozen rows over ``z = [y, t]``."""
         p = Z.shape[1]
-        rows = _Rows(width)
+        rows = _Rows(width, problem.n)
         lb = ub = None
+        margin = self.spec.freeze_margin * hard_scale(problem) if frozen or p < problem.n else 0.0
 
         def over_y(C: FloatArray) -> FloatArray:
             CZ = C @ Z
@@ -121,15 +171,17 @@ class CascadeBackend:
                 lb = np.concatenate((problem.lower, np.full(width - p, -np.inf)))
                 ub = np.concatenate((problem.upper, np.full(width - p, np.inf)))
             else:
-                rows.add(over_y(np.eye(problem.n)), problem.lower - xp, problem.upper - xp)
+                eye = np.eye(problem.n)
+                rows.add(over_y(eye), problem.lower - xp, problem.upper - xp, margin, eye)
         hard = problem.hard
         ineq = ~hard.eq
         if ineq.any():
             base = hard.A[ineq] @ xp
-            rows.add(over_y(hard.A[ineq]), hard.lo[ineq] - base, hard.hi[ineq] - base)
+            rows.add(over_y(hard.A[ineq]), hard.lo[ineq] - base, hard.hi[ineq] - base, margin,
+                     hard.A[ineq])
         for A, lo, hi in frozen:
             base = A @ xp
-            rows.add(over_y(A), lo - base, hi - base)
+            rows.add(over_y(A), lo - base, hi - base, 0.0, A)
         return rows, lb, ub
 
     # -- the cascade --------------------------------------------------------------------------
@@ -153,8 +205,9 @@ class CascadeBackend:
         for k, level in enumerate(problem.levels):
             if level.m == 0:
                 continue
+            active = np.zeros((0, n))
             if Z.shape[1]:
-                z = self._level(problem, level, xp, Z, frozen)
+                z, active = self._level(problem, level, xp, Z, frozen)
                 if z is None:
                     return self._failure(problem, x, k)
                 x = xp + Z @ z[: Z.shape[1]]
@@ -166,8 +219,9 @@ class CascadeBackend:
                                                         level.lo[ineq], 0.0)))
                 frozen.append((level.A[ineq], level.lo[ineq] - v[ineq] - scale,
                                level.hi[ineq] + v[ineq] + scale))
-            if level.eq.any() and Z.shape[1]:
-                N, _ = _null_space(level.A[level.eq] @ Z, self.rank_tol)
+            pinned = np.vstack((level.A[level.eq], active))
+            if pinned.shape[0] and Z.shape[1]:
+                N, _ = _null_space(pinned @ Z, self.rank_tol)
                 Z = Z @ N
             xp = x
         if Z.shape[1]:
@@ -175,11 +229,12 @@ class CascadeBackend:
             if z is None:
                 return self._failure(problem, x, len(problem.levels))
             x = xp + Z @ z
-        x = self._polish(problem, x)
+        x = polish_hard(problem, x)
         return BackendOutput(x, Status.OPTIMAL, "")
 
     def _level(self, problem: Problem, level: Any, xp: FloatArray, Z: FloatArray,
-               frozen: list[tuple[FloatArray, FloatArray, FloatArray]]) -> FloatArray | None:
+               frozen: list[tuple[FloatArray, FloatArray, FloatArray]]
+               ) -> tuple[FloatArray | None, FloatArray]:
         p = Z.shape[1]
         eq, ineq = level.eq, ~level.eq
         q_t = int(ineq.sum())
@@ -199,14 +254,24 @@ class CascadeBackend:
             Ci = np.hstack((level.A[ineq] @ Z, np.eye(q_t)))
             base = level.A[ineq] @ xp
             rows.add(Ci, level.lo[ineq] - base, level.hi[ineq] - base)
-        for attempt in range(2):
+        scale = max(1.0, float(np.abs(np.diag(P)).max()))
+        attempts = [(self.reg, self.prox_steps, None)]
+        attempts += [(self.reg, self.prox_steps, extra) for extra in self.spec.retries]
+        attempts.append((max(self.reg * 100.0, 1e-8), 3, None))
+        for rel, steps, extra in attempts:
+            rho = rel * scale
             Pr = P.copy()
-            rho = self.reg * (100.0 ** attempt) * max(1.0, float(np.abs(np.diag(P)).max()))
             Pr[:p, :p] += rho * np.eye(p)
-            z = self._qp(Pr, q, rows, lb, ub)
+            z, active = self._qp(Pr, q, rows, lb, ub, extra)
+            for _ in range(steps if rho > 0.0 else 0):
+                if z is None:
+                    break
+                qr = q.copy()
+                qr[:p] -= rho * z[:p]  # proximal centre at the previous answer
+                z, active = self._qp(Pr, qr, rows, lb, ub, extra)
             if z is not None and self._feasible(problem, xp + Z @ z[:p]):
-                return z
-        return None
+                return z, active
+        return None, np.zeros((0, problem.n))
 
     def _final(self, problem: Problem, xp: FloatArray, Z: FloatArray,
                frozen: list[tuple[FloatArray, FloatArray, FloatArray]]) -> FloatArray | None:
@@ -216,34 +281,20 @@ class CascadeBackend:
         P = 0.5 * (P + P.T)
         q = WZ.T @ xp
         rows, lb, ub = self._constraints(problem, xp, Z, p, frozen)
-        z = self._qp(P, q, rows, lb, ub)
-        if z is not None and self._feasible(problem, xp + Z @ z):
-            return z
+        for extra in (None, *self.spec.retries):
+            z, _ = self._qp(P, q, rows, lb, ub, extra)
+            if z is not None and self._feasible(problem, xp + Z @ z):
+                return z
         return None
 
     def _feasible(self, problem: Problem, x: FloatArray) -> bool:
         """Loose check (1e-6 relative) that a QP answer respects the hard rows before polishing."""
         return hard_violation(problem, x) <= 1e-6 * hard_scale(problem)
 
-    def _polish(self, problem: Problem, x: FloatArray) -> FloatArray:
-        """Remove round-off outside the box (clip) and the hard rows (least-norm corrections)."""
-        x = np.minimum(np.maximum(x, problem.lower), problem.upper)
-        hard = problem.hard
-        for _ in range(3):
-            if not hard.m:
-                break
-            s = hard.violation(x)
-            bad = np.abs(s) > 1e-12 * hard_scale(problem)
-            if not bad.any():
-                break
-            x = x - np.linalg.lstsq(hard.A[bad], s[bad], rcond=None)[0]
-            x = np.minimum(np.maximum(x, problem.lower), problem.upper)
-        return x
-
     def _failure(self, problem: Problem, x: FloatArray, k: int) -> BackendOutput:
         where = f"level {k}" if k < len(problem.levels) else "the final regularisation"
         suspect = k == 0 or not np.all(np.isfinite(x)) or not self._feasible(problem, x)
-        if suspect and not _hard_feasible(problem):
+        if suspect and not hard_feasible(problem):
             return BackendOutput(x, Status.HARD_INFEASIBLE,
                                  "the hard box and hard rows admit no point")
         return BackendOutput(x, Status.BACKEND_ERROR,
@@ -251,27 +302,47 @@ class CascadeBackend:
                              "only")
 
 
-def _hard_feasible(problem: Problem) -> bool:
-    """Independent feasibility check of the hard box and rows (HiGHS LP through SciPy)."""
-    from scipy.optimize import linprog
+def _polish_active_set(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
+                       lb: FloatArray | None, ub: FloatArray | None, z: FloatArray,
+                       act_tol: float = 1e-7) -> FloatArray:
+    """Sharpen an inexact (interior-point / ADMM) answer on its own active set.
 
-    hard = problem.hard
-    A_ub, b_ub, A_eq, b_eq = [], [], None, None
-    if hard.m:
-        ineq = ~hard.eq
-        hi, lo = hard.hi[ineq], hard.lo[ineq]
-        up, dn = np.isfinite(hi), np.isfinite(lo)
-        if up.any():
-            A_ub.append(hard.A[ineq][up])
-            b_ub.append(hi[up])
-        if dn.any():
-            A_ub.append(-hard.A[ineq][dn])
-            b_ub.append(-lo[dn])
-        if hard.eq.any():
-            A_eq, b_eq = hard.A[hard.eq], hard.lo[hard.eq]
-    bounds = [(None if not np.isfinite(lo) else lo, None if not np.isfinite(hi) else hi)
-              for lo, hi in zip(problem.lower, problem.upper, strict=True)]
-    res = linprog(np.zeros(problem.n), A_ub=np.vstack(A_ub) if A_ub else None,
-                  b_ub=np.concatenate(b_ub) if b_ub else None, A_eq=A_eq, b_eq=b_eq,
-                  bounds=bounds, method="highs")
-    return res.status != 2
+    With ``J`` the constraints within ``act_tol`` (relative) of being active at ``z``, solve the equality-constrained
+    QP ``min 0.5 z'Pz + q'z  s.t.  G_J z = h_J`` through its KKT system (least squares, so dependent
+    rows are harmless). The polished point replaces ``z`` only if it is feasible (to 1e-10) and
+    does not increase the objective, so polishing can never make an answer worse. It removes the
+    ``sqrt(mu)`` errors interior-point methods leave on degenerate optima.
+    """
+    rows, rhs = [], []
+    n = z.size
+    if G is not None and h is not None:
+        act = h - G @ z <= act_tol * (1.0 + np.abs(h))
+        rows.append(G[act])
+        rhs.append(h[act])
+    eye = np.eye(n)
+    if lb is not None:
+        act = np.isfinite(lb) & (z - lb <= act_tol * (1.0 + np.abs(np.nan_to_num(lb))))
+        rows.append(eye[act])
+        rhs.append(lb[act])
+    if ub is not None:
+        act = np.isfinite(ub) & (ub - z <= act_tol * (1.0 + np.abs(np.nan_to_num(ub))))
+        rows.append(eye[act])
+        rhs.append(ub[act])
+    C = np.vstack(rows) if rows else np.zeros((0, n))
+    d = np.concatenate(rhs) if rhs else np.zeros(0)
+    m = C.shape[0]
+    K = np.block([[P, C.T], [C, np.zeros((m, m))]])
+    sol = np.linalg.lstsq(K, np.concatenate((-q, d)), rcond=1e-13)[0]
+    zp = sol[:n]
+    if not np.all(np.isfinite(zp)):
+        return z
+    tol = 1e-10
+    if G is not None and h is not None and np.any(G @ zp - h > tol * (1.0 + np.abs(h))):
+        return z
+    if lb is not None and np.any(zp < lb - tol * (1.0 + np.abs(np.nan_to_num(lb)))):
+        return z
+    if ub is not None and np.any(zp > ub + tol * (1.0 + np.abs(np.nan_to_num(ub)))):
+        return z
+    f = 0.5 * z @ P @ z + q @ z
+    fp = 0.5 * zp @ P @ zp + q @ zp
+    return zp if fp <= f + 1e-12 * (1.0 + abs(f)) else z

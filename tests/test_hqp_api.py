@@ -1,0 +1,247 @@
+"""Public surface of the lexicographic solver: results, statuses, semantics and bad input."""
+
+import numpy as np
+import pytest
+
+from uvms_qp import (
+    BoundsError,
+    InputError,
+    NonFiniteError,
+    ShapeError,
+    UnknownSolverError,
+    solve_hierarchy,
+)
+from uvms_qp.hqp import HierarchySolver, Rows, Status, available_solvers
+from uvms_qp.hqp.registry import SOLVERS, SolverSpec, get_spec
+
+QP = [s for s in available_solvers() if s != "nullspace"]
+EXACT = ["daqp", "cascade:quadprog"]
+
+
+def test_available_solvers_lists_installed_in_registry_order():
+    names = available_solvers()
+    assert names[:2] == ["daqp", "nullspace"]
+    assert all(n.startswith("cascade:") for n in names[2:])
+    assert names == [s.name for s in SOLVERS if s.available]
+
+
+@pytest.mark.parametrize("name", QP)
+def test_priority_and_bounds_hand_checked(name):
+    """x0 + x1 = 1 first, then x = (5, 5, 5) inside |x| <= 1: x = (0.5, 0.5, 1)."""
+    A1 = np.array([[1.0, 1.0, 0.0]])
+    result = solve_hierarchy([[(A1, [1.0])], [(np.eye(3), [5.0, 5.0, 5.0])]],
+                             lower=[-1.0] * 3, upper=[1.0] * 3, solver=name)
+    assert result.status is Status.LEVEL_INFEASIBLE and result.ok
+    assert result.infeasible_level == 1
+    assert np.allclose(result.x, [0.5, 0.5, 1.0], atol=1e-6)
+    assert result.active_upper.tolist() == [False, False, True]
+    assert not result.active_lower.any()
+    assert result.level_residuals[0] < 1e-6
+    assert result.level_residuals[1] == pytest.approx(np.sqrt(2 * 4.5**2 + 16.0), rel=1e-6)
+    text = result.summary()
+    assert name in text and "level 1" in text and "NOT met" in text
+
+
+@pytest.mark.parametrize("name", QP)
+def test_inequality_level_keeps_freedom(name):
+    """Level 1: x0 >= 1 (inequality); level 2: x0 = 3. Freezing slacks (not A x) gives x0 = 3."""
+    result = solve_hierarchy([[(np.array([[1.0, 0.0]]), [1.0], [np.inf])],
+                              [(np.array([[1.0, 0.0]]), [3.0])]], solver=name)
+    assert result.status is Status.OPTIMAL
+    assert result.x == pytest.approx([3.0, 0.0], abs=1e-6)
+
+
+@pytest.mark.parametrize("name", QP)
+def test_frozen_violation_of_infeasible_inequality_level(name):
+    """Level 1: x0 >= 2 under x0 <= 1 (violation 1 frozen); level 2 x0 = 0 must not move x0."""
+    result = solve_hierarchy([[(np.array([[1.0, 0.0]]), [2.0], [np.inf])],
+                              [(np.array([[1.0, 1.0]]), [0.0])]],
+                             lower=[-1.0, -1.0], upper=[1.0, 1.0], solver=name)
+    assert result.infeasible_level == 0
+    assert result.x == pytest.approx([1.0, -1.0], abs=1e-6)
+    assert result.level_residuals == pytest.approx([1.0, 0.0], abs=1e-6)
+
+
+@pytest.mark.parametrize("name", QP)
+def test_hard_infeasible_is_reported(name):
+    result = solve_hierarchy([[(np.eye(2), [0.0, 0.0])]], lower=[0.0, 0.0], upper=[1.0, 1.0],
+                             solver=name, hard=[(np.array([[1.0, 1.0]]), [3.0], [np.inf])])
+    assert result.status is Status.HARD_INFEASIBLE
+    assert not result.ok
+    assert np.all(np.isfinite(result.x))
+
+
+@pytest.mark.parametrize("name", QP)
+def test_hard_rows_hold(name):
+    A = np.array([[1.0, 1.0, 1.0]])
+    result = solve_hierarchy([[(np.eye(3), [1.0, 1.0, 1.0])]], solver=name,
+                             hard=[(A, [-np.inf], [1.5])])
+    assert result.ok and result.infeasible_level == 0
+    assert (A @ result.x)[0] <= 1.5 + 1e-9
+    assert result.x == pytest.approx([0.5, 0.5, 0.5], abs=1e-6)
+
+
+@pytest.mark.parametrize("name", ["nullspace", *QP])
+def test_rank_deficient_and_conflicting_levels(name):
+    """Duplicated rows and a level conflicting with the first: least squares in the null space."""
+    A1 = np.array([[1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])  # rank 1, consistent
+    A2 = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # first row conflicts with level 1
+    result = solve_hierarchy([[(A1, [1.0, 2.0])], [(A2, [3.0, 2.0])]], solver=name)
+    assert result.status is Status.LEVEL_INFEASIBLE and result.infeasible_level == 1
+    assert result.x == pytest.approx([1.0, 2.0, 0.0], abs=1e-6)
+    assert result.level_residuals[1] == pytest.approx(2.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("name", ["nullspace", *QP])
+def test_algorithmic_singularity_gives_finite_answer(name):
+    """Two tasks that become parallel (a conflict of rank one): finite x, truthful status."""
+    eps = 1e-9
+    A1 = np.array([[1.0, 0.0]])
+    A2 = np.array([[1.0, eps]])
+    result = solve_hierarchy([[(A1, [0.0])], [(A2, [1.0])]], solver=name)
+    assert np.all(np.isfinite(result.x))
+    assert result.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+    assert abs(result.x[0]) < 1e-6  # the first level is never traded for the second
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e6])
+@pytest.mark.parametrize("name", ["nullspace", *EXACT])
+def test_scalings(name, scale):
+    rng = np.random.default_rng(5)
+    A1, A2 = rng.standard_normal((2, 5)), rng.standard_normal((2, 5))
+    b1, b2 = rng.standard_normal(2), rng.standard_normal(2)
+    base = solve_hierarchy([[(A1, b1)], [(A2, b2)]], solver="nullspace").x
+    result = solve_hierarchy([[(A1, b1 * scale)], [(A2, b2 * scale)]], solver=name)
+    assert result.status is Status.OPTIMAL
+    assert result.x == pytest.approx(base * scale, rel=1e-6, abs=1e-6 * scale)
+
+
+def test_daqp_row_normalisation_documented_difference():
+    """For an unmet level DAQP minimises sum (s_i / |a_i|)^2: row scale and weight do not matter.
+
+    Same rows as weights 1/|a_i|^2 on a cascade reproduce DAQP's compromise exactly.
+    """
+    A = np.array([[1.0, 0.0], [10.0, 0.0]])
+    b = np.array([0.0, 10.0])  # x0 = 0 and 10 x0 = 10 conflict
+    daqp = solve_hierarchy([[Rows.equality(A, b, weights=[1.0, 7.0])]], solver="daqp")
+    plain = solve_hierarchy([[(A, b)]], solver="cascade:quadprog")
+    normalised = solve_hierarchy(
+        [[Rows.equality(A, b, weights=1.0 / np.sum(A * A, axis=1))]], solver="cascade:quadprog")
+    assert plain.x[0] == pytest.approx(100.0 / 101.0, abs=1e-8)  # the weighted semantics
+    assert daqp.x[0] == pytest.approx(0.5, abs=1e-6)  # DAQP's row-normalised semantics
+    assert daqp.x[0] == pytest.approx(normalised.x[0], abs=1e-6)
+
+
+@pytest.mark.parametrize("name", ["nullspace", *EXACT])
+def test_weights_agree_when_level_is_met(name):
+    """Weights change nothing when the level can be met: every back-end gives the same x."""
+    A = np.array([[1.0, 2.0, 0.0], [0.0, 3.0, 1.0]])
+    b = np.array([1.0, 2.0])
+    plain = solve_hierarchy([[(A, b)]], solver="nullspace").x
+    weighted = solve_hierarchy([[Rows.equality(A, b, weights=[5.0, 0.1])]], solver=name).x
+    assert weighted == pytest.approx(plain, abs=1e-7)
+
+
+def test_cascade_weights_are_weighted_least_squares():
+    A = np.array([[1.0, 0.0], [1.0, 0.0]])
+    b = np.array([0.0, 1.0])
+    result = solve_hierarchy([[Rows.equality(A, b, weights=[1.0, 3.0])]],
+                             solver="cascade:quadprog")
+    assert result.x[0] == pytest.approx(0.75, abs=1e-8)
+    assert result.level_residuals[0] == pytest.approx(np.sqrt(0.75**2 + 3 * 0.25**2), abs=1e-8)
+
+
+def test_nullspace_refuses_inequality_levels():
+    with pytest.raises(InputError, match=r"levels\[1\].*equality rows only"):
+        solve_hierarchy([[(np.eye(2), [1.0, 1.0])], [(np.eye(2), [0.0, 0.0], [1.0, 1.0])]],
+                        solver="nullspace")
+
+
+def test_nullspace_reports_violated_bound():
+    result = solve_hierarchy([[(np.eye(2), [2.0, 0.0])]], lower=[-1, -1], upper=[1, 1],
+                             solver="nullspace")
+    assert result.status is Status.BACKEND_ERROR
+    assert "upper bound 0" in result.message
+    assert np.all(np.isfinite(result.x))
+
+
+def test_solver_object_reuse_is_consistent():
+    rng = np.random.default_rng(9)
+    solver = HierarchySolver("daqp", weights=[1.0, 2.0, 3.0, 4.0])
+    for _ in range(20):
+        A1, b1 = rng.standard_normal((2, 4)), rng.standard_normal(2)
+        A2, b2 = rng.standard_normal((1, 4)), rng.standard_normal(1)
+        levels = [[(A1, b1)], [(A2, b2)]]
+        again = solver.solve(levels, -np.full(4, 10.0), np.full(4, 10.0))
+        fresh = solve_hierarchy(levels, solver="nullspace", weights=[1.0, 2.0, 3.0, 4.0])
+        assert again.x == pytest.approx(fresh.x, abs=1e-7)
+        assert again.solve_time > 0.0 and again.solver == "daqp"
+
+
+def test_empty_and_all_equal_bounds():
+    result = solve_hierarchy([[(np.eye(2), [3.0, 3.0])]], lower=[1.0, 1.0], upper=[1.0, 2.0])
+    assert result.x == pytest.approx([1.0, 2.0])
+    assert result.active_lower.tolist() == [True, False]
+    assert result.active_upper.tolist() == [True, True]
+
+
+def test_no_levels_gives_minimum_norm_point_of_box():
+    result = solve_hierarchy([], lower=[1.0, -2.0], upper=[3.0, -1.0], solver="cascade:quadprog")
+    assert result.x == pytest.approx([1.0, -1.0])
+    assert result.level_residuals == []
+
+
+# -- bad input -------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("levels", "kwargs", "error", "match"),
+    [
+        ([[(np.eye(2), [1.0])]], {}, ShapeError, r"levels\[0\]\[0\]\.b"),
+        ([[(np.eye(2), [1.0, 1.0])], [(np.eye(3), [1.0, 1.0, 1.0])]], {}, ShapeError,
+         r"levels\[1\]\[0\]\.A: expected 2 columns"),
+        ([[(np.array([[1.0, np.nan]]), [1.0])]], {}, NonFiniteError, "NaN"),
+        ([[(np.eye(2), [1.0, np.inf])]], {}, NonFiniteError, "inf"),
+        ([[(np.eye(2), [2.0, 0.0], [1.0, 1.0])]], {}, BoundsError, "lower > upper"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [1.0, 0.0], "upper": [0.0, 1.0]}, BoundsError,
+         "bounds"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [0.0]}, ShapeError, "lower"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, -1.0]}, InputError, "weights"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, np.nan]}, NonFiniteError, "weights"),
+        ([["not rows"]], {}, InputError, r"levels\[0\]\[0\]"),
+        ("nope", {}, InputError, "levels"),
+    ],
+)
+def test_bad_input(levels, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        solve_hierarchy(levels, **kwargs)
+
+
+def test_unknown_solver_lists_installed():
+    with pytest.raises(UnknownSolverError) as info:
+        solve_hierarchy([[(np.eye(2), [1.0, 1.0])]], solver="gurobi")
+    assert "daqp" in str(info.value) and "nullspace" in str(info.value)
+    assert isinstance(info.value, LookupError)
+
+
+def test_unknown_cascade_names_the_choices():
+    with pytest.raises(UnknownSolverError, match="cascades exist for the qpsolvers back-ends"):
+        HierarchySolver("cascade:cplex")
+
+
+def test_uninstalled_solver_says_what_to_install(monkeypatch):
+    import uvms_qp.hqp.registry as registry
+
+    ghost = SolverSpec(name="cascade:ghost", kind="cascade", modules=("no_such_module_x",),
+                       pip="qpsolvers ghostqp")
+    monkeypatch.setattr(registry, "_BY_NAME", {**registry._BY_NAME, "cascade:ghost": ghost})
+    with pytest.raises(UnknownSolverError, match=r"pip install qpsolvers ghostqp") as info:
+        get_spec("cascade:ghost")
+    assert "daqp" in str(info.value)
+
+
+def test_cli_solvers_lists_installed(capsys):
+    from uvms_qp.cli import main
+
+    assert main(["solvers"]) == 0
+    out = capsys.readouterr().out
+    for name in available_solvers():
+        assert name in out
