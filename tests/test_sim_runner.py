@@ -214,3 +214,18 @@ def test_scenario_built_in_code_runs_and_validates():
                        events=[Event(0.5, "cargo", {"force": 1.0})])
     with pytest.raises(InputError, match="dt"):
         Scenario.build(model, stack(), q0, dt=0.0, duration=1.0)
+
+
+def test_rk4_closed_loop_tracks_better_than_euler():
+    data = tomllib.loads(SMALL.replace('position = [0.4911, 0.0990, -0.1675]', 'trajectory = "p"')
+                         + """
+[trajectories.p]
+type = "quintic"
+start = [0.4911, 0.0990, -0.1675]
+goal = [0.4611, 0.1290, -0.1475]
+duration = 0.8
+""")
+    euler = simulate(scenario_from_dict(data)).metrics()["ee_error_max"]
+    data["integrator"] = "rk4"
+    rk4 = simulate(scenario_from_dict(data)).metrics()["ee_error_max"]
+    assert rk4 < 0.5 * euler
