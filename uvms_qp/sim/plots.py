@@ -118,15 +118,18 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     fig.suptitle(f"{result.scenario}: commanded rates and hard bounds [m/s, rad/s]")
     files.append(_save(fig, out / "rates.png"))
 
-    fig, ax = plt.subplots(figsize=(8, 3.5))
+    fig, ax = plt.subplots(figsize=(9, 4))
     for level in range(result.level_residuals.shape[1]):
         values = result.level_residuals[:, level]
         if np.isfinite(values).any():
-            ax.semilogy(ts, np.maximum(values, 1e-12), label=f"level {level + 1}")
+            label = f"level {level + 1}"
+            if level < len(result.level_names):
+                label += f" ({result.level_names[level]})"
+            ax.semilogy(ts, np.maximum(values, 1e-12), label=label)
     ax.set_ylabel("residual norm")
     ax.set_xlabel("t [s]")
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="best")
+        ax.legend(loc="best", fontsize="small")
     _events(ax, result)
     fig.suptitle(f"{result.scenario}: per-level residuals")
     files.append(_save(fig, out / "residuals.png"))

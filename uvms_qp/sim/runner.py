@@ -75,6 +75,8 @@ class SimulationResult:
         heading: Target heading of a current-alignment task or the current [rad], or None.
         events: Events applied (time, task, update).
         wall_time: Wall time of the whole run [s].
+        phases: Scenario phases, name -> (start, end) [s].
+        level_names: Label of each level (its task names).
     """
 
     scenario: str
@@ -114,6 +116,7 @@ class SimulationResult:
     events: list[dict[str, Any]] = field(default_factory=list)
     wall_time: float = 0.0
     phases: dict[str, tuple[float, float]] = field(default_factory=dict)
+    level_names: list[str] = field(default_factory=list)
 
     def metrics(self) -> dict[str, Any]:
         """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`)."""
@@ -333,4 +336,6 @@ def simulate(
         events=applied,
         wall_time=wall,
         phases={p.name: (p.start, p.end) for p in getattr(scenario, "phases", [])},
+        level_names=[", ".join(task.name for task in level.tasks)
+                     for level in scenario.stack.levels],
     )
