@@ -237,6 +237,20 @@ def test_cli_rejects_invalid_scenario_without_writing(bad_file, tmp_path, capsys
     assert not (out / "results.json").exists()
 
 
+@pytest.mark.parametrize(
+    ("options", "fragment"),
+    [(["--solver", "gurobi"], "unknown solver 'gurobi'"),
+     (["--duration", "-2"], "--duration: expected a positive number of seconds")],
+)
+def test_cli_rejects_bad_options_without_writing(options, fragment, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["run", "bluerov2_demo", "--out", str(out), "--quiet", *options])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert fragment in err and "Traceback" not in err
+    assert not (out / "results.json").exists()
+
+
 def test_cli_subprocess_exit_status_and_no_traceback(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("model = [")

@@ -56,12 +56,16 @@ def _summary(metrics: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate, simulate; write ``results.json`` and the figures into ``args.out``."""
+    from ..errors import ConfigError
     from ..sim.plots import plot_results
     from ..sim.results import write_results
     from ..sim.runner import simulate
     from ..sim.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
+    if args.duration is not None and not args.duration > 0.0:
+        raise ConfigError(f"expected a positive number of seconds, got {args.duration}",
+                          "--duration")
     scheme = scenario.make_controller(args.solver) if args.solver else None
     result = simulate(
         scenario,
@@ -72,11 +76,11 @@ def run(args: argparse.Namespace) -> int:
     if args.solver:
         result.solver = args.solver
     path = write_results(result, args.out)
-    if not args.no_plots:
-        plot_results(result, args.out)
+    figures = [] if args.no_plots else plot_results(result, args.out)
     if not args.quiet:
         print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s in "
-              f"{result.wall_time:.2f} s -> {path}")
+              f"{result.wall_time:.2f} s -> {path}"
+              + (f" and {len(figures)} figures" if figures else ""))
         print(_summary(result.metrics()))
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
