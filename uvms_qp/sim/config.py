@@ -104,9 +104,12 @@ def check_number(
     Raises:
         ConfigError: not a number, not finite, or out of range.
     """
+    kind = "integer" if integer else "number"
     what = (
-        "a positive " if positive else "a non-negative " if nonnegative else "a "
-    ) + ("integer" if integer else "number")
+        f"a positive {kind}" if positive
+        else f"a non-negative {kind}" if nonnegative
+        else ("an integer" if integer else "a number")
+    )
     if not is_number(value) or (integer and not isinstance(value, int)):
         raise ConfigError(f"expected {what}, got {describe(value)}", path)
     if not math.isfinite(value):
