@@ -1,0 +1,126 @@
+"""Hard constraints: box semantics, merging, defaults from the model, validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvms_qp.constraints import (
+    CONSTRAINT_TYPES,
+    Constraint,
+    JointPositionBounds,
+    JointVelocityBounds,
+    LinearInequality,
+    VehicleRateBounds,
+)
+from uvms_qp.controller import Controller
+from uvms_qp.errors import BoundsError, InputError, UnknownNameError
+from uvms_qp.model import load_model
+from uvms_qp.stack import Level, Stack
+from uvms_qp.tasks import PostureTask
+
+
+@pytest.fixture(scope="module")
+def rov():
+    return load_model("bluerov2_heavy_alpha5")
+
+
+def _with_joints(model, joints):
+    eta = model.split(model.home())[0]
+    return model.state(model.configuration(eta, joints))
+
+
+def test_registry():
+    assert set(CONSTRAINT_TYPES) == {"joint_position_bounds", "joint_velocity_bounds",
+                                     "vehicle_rate_bounds", "linear_inequality"}
+
+
+def test_joint_position_bounds_one_euler_step_stays_inside(rov):
+    dt = 0.1
+    c = JointPositionBounds(gain=1.0).bind(rov)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        joints = rng.uniform(rov.joint_lower, rov.joint_upper)
+        lo, hi = c.box(_with_joints(rov, joints), dt)
+        assert np.all(np.isinf(lo[:6])) and np.all(np.isinf(hi[:6]))  # vehicle untouched
+        np.testing.assert_allclose(joints + dt * hi[6:], rov.joint_upper, atol=1e-12)
+        np.testing.assert_allclose(joints + dt * lo[6:], rov.joint_lower, atol=1e-12)
+
+
+def test_joint_outside_its_limit_may_only_return(rov):
+    joints = np.array([-0.2, 1.0, 3.7, 3.0])  # axis_e below 0, axis_c above 3.5
+    lo, hi = JointPositionBounds(gain=0.5, margin=0.05).bind(rov).box(_with_joints(rov, joints),
+                                                                       0.05)
+    assert lo[6] == 0.0 and hi[6] > 0.0      # below: may stay or move up, never down
+    assert hi[8] == 0.0 and lo[8] < 0.0      # above: may stay or move down, never up
+    assert lo[7] < 0.0 < hi[7]
+
+
+def test_velocity_and_vehicle_defaults_from_model(rov):
+    state = rov.state(rov.home())
+    lo, hi = JointVelocityBounds().bind(rov).box(state, 0.1)
+    np.testing.assert_allclose(hi[6:], rov.joint_rate_limit)
+    np.testing.assert_allclose(lo[6:], -rov.joint_rate_limit)
+    lo, hi = VehicleRateBounds().bind(rov).box(state, 0.1)
+    np.testing.assert_allclose(hi[:6], rov.vehicle_rate_limit)
+    lo, hi = VehicleRateBounds(linear=0.4, angular=0.2).bind(rov).box(state, 0.1)
+    np.testing.assert_allclose(hi[:6], [0.4, 0.4, 0.4, 0.2, 0.2, 0.2])
+    assert np.all(np.isinf(hi[6:]))
+    with pytest.raises(InputError, match="expected 6 values"):
+        VehicleRateBounds(limits=[1.0, 1.0]).bind(rov)
+
+
+def test_boxes_merge_by_intersection(rov):
+    stack = Stack(levels=[Level(PostureTask())],
+                  constraints=[JointPositionBounds(), JointVelocityBounds(scale=0.5),
+                               VehicleRateBounds(linear=0.3, angular=0.1)])
+    ctrl = Controller(rov, stack, dt=0.05)
+    joints = np.array([0.01, 1.0, 1.0, 6.19])
+    state = _with_joints(rov, joints)
+    lower, upper = ctrl.bounds(state)
+    expected_hi = np.minimum((rov.joint_upper - joints) / 0.05, 0.25)
+    expected_lo = np.maximum((rov.joint_lower - joints) / 0.05, -0.25)
+    np.testing.assert_allclose(upper[6:], expected_hi)
+    np.testing.assert_allclose(lower[6:], expected_lo)
+    np.testing.assert_allclose(upper[:6], [0.3, 0.3, 0.3, 0.1, 0.1, 0.1])
+
+
+class _Forced(Constraint):
+    """Test constraint demanding the first joint move at >= 1 rad/s."""
+
+    type_name = "forced"
+    has_box = True
+
+    def fill_box(self, state, dt, lower, upper):
+        lower[6] = max(lower[6], 1.0)
+
+
+def test_empty_box_raises_with_culprits(rov):
+    stack = Stack(levels=[Level(PostureTask())], constraints=[JointVelocityBounds(), _Forced()])
+    ctrl = Controller(rov, stack, dt=0.05)
+    with pytest.raises(BoundsError, match=r"zeta\[6\] \(axis_e\).*joint_velocity_bounds.*forced"):
+        ctrl.step(rov.state(rov.home()), 0.0)
+
+
+def test_linear_inequality_named_columns(rov):
+    c = LinearInequality(A=[[1.0, 1.0]], upper=[0.2], columns=["u", "axis_b"]).bind(rov)
+    rows = c.rows(rov.state(rov.home()), 0.1)
+    assert rows.A[0, 0] == 1.0 and rows.A[0, 9] == 1.0 and rows.A.sum() == 2.0
+    assert rows.lower[0] == -np.inf and rows.upper[0] == 0.2
+    with pytest.raises(UnknownNameError, match="zeta component 'x'"):
+        LinearInequality(A=[[1.0]], upper=[0.0], columns=["x"]).bind(rov)
+    with pytest.raises(InputError, match="expected 10 columns"):
+        LinearInequality(A=[[1.0, 2.0]], upper=[0.0]).bind(rov)
+    with pytest.raises(BoundsError):
+        LinearInequality(A=[[1.0]], lower=[1.0], upper=[0.0], columns=["u"])
+
+
+@pytest.mark.parametrize("cls, kwargs, match", [
+    (JointPositionBounds, {"gain": 1.5}, "gain"),
+    (JointPositionBounds, {"margin": -0.1}, "margin"),
+    (JointVelocityBounds, {"limits": [0.0, 1.0]}, "positive"),
+    (VehicleRateBounds, {"linear": -1.0}, "linear"),
+])
+def test_bad_constraint_arguments(cls, kwargs, match):
+    with pytest.raises(InputError, match=match):
+        cls(**kwargs)

@@ -1,0 +1,204 @@
+"""Task construction, binding and run-time validation: bad input raises the project's errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvms_qp.errors import InputError, UnknownFrameError, UnknownJointError
+from uvms_qp.model import load_model
+from uvms_qp.stack import Level, Stack
+from uvms_qp.tasks import (
+    TASK_TYPES,
+    CurrentAlignmentTask,
+    EndEffectorTask,
+    JointLimitTask,
+    ManipulabilityTask,
+    PayloadMomentTask,
+    PostureTask,
+    StationKeepingTask,
+    VehicleAttitudeTask,
+    VehicleMotionTask,
+    shaping_function,
+)
+
+
+@pytest.fixture(scope="module")
+def rov():
+    return load_model("bluerov2_heavy_alpha5")
+
+
+@pytest.fixture(scope="module")
+def wang():
+    return load_model("wang_9dof")
+
+
+def test_registry_keys_are_type_names():
+    assert set(TASK_TYPES) == {
+        "end_effector", "station_keeping", "manipulability", "joint_limit", "payload_moment",
+        "current_alignment", "vehicle_attitude", "posture", "vehicle_motion"}
+    for key, cls in TASK_TYPES.items():
+        assert cls.type_name == key
+        assert cls.__doc__ and cls.error_unit and cls.rate_unit
+
+
+def test_target_never_set_names_the_task(rov):
+    task = EndEffectorTask(name="grab").bind(rov)
+    with pytest.raises(InputError, match=r"'grab'.*target never set"):
+        task.rows(rov.state(rov.neutral()), 0.0)
+    align = CurrentAlignmentTask(name="align").bind(rov)
+    with pytest.raises(InputError, match="'align'"):
+        align.rows(rov.state(rov.neutral()), 0.0)
+
+
+def test_unknown_frame_lists_known_frames(rov):
+    with pytest.raises(UnknownFrameError, match=r"tool2.*known frames.*tool"):
+        EndEffectorTask("tool2", position=[0, 0, 0]).bind(rov)
+    with pytest.raises(UnknownFrameError):
+        ManipulabilityTask(mode="ascend", frame="nope").bind(rov)
+    with pytest.raises(UnknownJointError, match="elbow"):
+        PostureTask(joints=["elbow"]).bind(rov)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"mode": "speed"}, "mode"),
+    ({"axes": ["x", "w"]}, "unknown axis 'w'"),
+    ({"axes": ["x", "x"]}, "twice"),
+    ({"gain": -1.0}, "gain"),
+    ({"weight": 0.0}, "weight"),
+    ({"position": [1.0, 2.0, float("nan")]}, "NaN"),
+    ({"mode": "orientation", "rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}, "not a rotation"),
+    ({"mode": "orientation", "rotation": [[1, 0, 0], [0, 1, 0], [0, 0, -1]]}, "reflection"),
+    ({"trajectory": 3.0}, "sample"),
+    ({"name": " padded "}, "name"),
+])
+def test_end_effector_rejects_bad_arguments(kwargs, match):
+    with pytest.raises(InputError, match=match):
+        EndEffectorTask(**kwargs)
+
+
+def test_gain_length_checked_at_bind(rov):
+    with pytest.raises(InputError, match="expected 3 gains"):
+        EndEffectorTask(position=[0, 0, 0], gain=[1.0, 2.0]).bind(rov)
+
+
+def test_attitude_needs_actuated_roll_pitch(rov, wang):
+    VehicleAttitudeTask().bind(rov)  # BlueROV2 Heavy actuates p and q
+    with pytest.raises(InputError, match="does not actuate 'p'"):
+        VehicleAttitudeTask().bind(wang)
+    with pytest.raises(InputError, match="passive"):
+        StationKeepingTask(axes=["x", "phi"]).bind(wang)
+
+
+def test_fixed_base_has_no_vehicle_tasks():
+    arm = load_model("nenchev_pa10_arm")
+    for task in (StationKeepingTask(), CurrentAlignmentTask(heading=0.0), VehicleMotionTask()):
+        with pytest.raises(InputError):
+            task.bind(arm)
+
+
+def test_mode_parameters_required():
+    with pytest.raises(InputError, match="minimum"):
+        ManipulabilityTask(mode="floor")
+    with pytest.raises(InputError, match="threshold"):
+        ManipulabilityTask(mode="shaping")
+    with pytest.raises(InputError, match="maximum"):
+        PayloadMomentTask(mode="bound")
+    with pytest.raises(InputError, match="beta"):
+        VehicleMotionTask(beta=1.0)
+
+
+def test_joint_limit_margin_too_large(rov):
+    with pytest.raises(InputError, match="no room"):
+        JointLimitTask(margin=2.0).bind(rov)  # axis_c spans 3.5 rad
+
+
+def test_update_validates_and_applies(rov):
+    payload = PayloadMomentTask(force=0.0).bind(rov)
+    state = rov.state(rov.home())
+    assert np.all(payload.rows(state).lower == 0.0)  # no payload: no demand
+    payload.update(force=20.0)
+    assert payload.force == 20.0
+    assert np.any(payload.rows(state).lower != 0.0)
+    with pytest.raises(InputError, match="force"):
+        payload.update(force=-1.0)
+    with pytest.raises(InputError, match=r"unknown parameter 'mass'.*force"):
+        payload.update(mass=3.0)
+
+
+def test_station_keeping_holds_activation_pose(rov):
+    rng = np.random.default_rng(0)
+    task = StationKeepingTask(gain=2.0).bind(rov)
+    q0 = rov.random_configuration(rng)
+    rows0 = task.rows(rov.state(q0))
+    np.testing.assert_allclose(rows0.lower, 0.0, atol=1e-15)
+    q1 = rov.integrate(q0, np.r_[0.3, 0, 0, 0, 0, 0.2, 0, 0, 0, 0], 1.0)
+    e = task.compute_error(rov.state(q1), 0.0)
+    eta0, eta1 = rov.split(q0)[0], rov.split(q1)[0]
+    np.testing.assert_allclose(e, (eta0 - eta1)[[0, 1, 2, 5]], atol=1e-12)
+    task.reset()
+    np.testing.assert_allclose(task.compute_error(rov.state(q1), 0.0), 0.0)
+    current = StationKeepingTask(hold="current").bind(rov)
+    np.testing.assert_allclose(current.compute_error(rov.state(q1), 0.0), 0.0)
+
+
+def test_current_alignment_wraps_the_error(rov):
+    task = CurrentAlignmentTask(heading=3.1, gain=1.0).bind(rov)
+    q = rov.configuration([0, 0, 0, 0, 0, -3.1], rov.split(rov.home())[1])
+    e = task.compute_error(rov.state(q), 0.0)
+    assert e[0] == pytest.approx(6.2 - 2 * np.pi)  # the short way round, not 6.2 rad
+    task.update(direction=[0.0, 1.0])
+    assert task.heading == pytest.approx(np.pi / 2)
+
+
+def test_shaping_function_end_points():
+    assert shaping_function(1.3, 1.3) == 0.0
+    assert shaping_function(2.0, 1.3) == 0.0
+    assert shaping_function(0.64, 1.3) == 1.0
+    mid = shaping_function(0.975, 1.3)
+    assert mid == pytest.approx(0.5)
+
+
+def test_shaping_sign_switch(rov):
+    """Eq. (21): the gradient term acts only while w is not increasing."""
+    task = ManipulabilityTask(mode="shaping", threshold=10.0, gain=1.0).bind(rov)
+    rng = np.random.default_rng(1)
+    q0 = rov.home()
+    w0, g0 = task.compute_value(rov.state(q0))
+    first = task.rows(rov.state(q0), 0.0)
+    np.testing.assert_allclose(first.lower, g0)  # k = 1 (w << threshold), w_dot = 0 -> active
+    zeta = np.zeros(rov.nv)
+    zeta[6:] = g0 / np.linalg.norm(g0) * 0.1  # increase w
+    q1 = rov.integrate(q0, zeta, 0.1)
+    assert task.compute_value(rov.state(q1))[0] > w0
+    rows = task.rows(rov.state(q1), 0.1)
+    np.testing.assert_allclose(rows.lower, 0.0)  # switched off while w grows
+    del rng
+
+
+def test_vehicle_motion_weights_follow_eq14(rov):
+    task = VehicleMotionTask(beta=0.8, w_max=0.5).bind(rov)
+    w = task.row_weights
+    np.testing.assert_allclose(w[:6], 1 / ((1 - 0.8) * 0.5))
+    np.testing.assert_allclose(w[6:], 1 / 0.8)
+
+
+def test_stack_validation():
+    a = EndEffectorTask(position=[0, 0, 0], name="a")
+    with pytest.raises(InputError, match="at least one task"):
+        Level()
+    with pytest.raises(InputError, match="at least one task"):
+        Stack(levels=[[a], []])
+    with pytest.raises(InputError, match="duplicate task name 'a'"):
+        Stack(levels=[Level(a), Level(EndEffectorTask(position=[1, 0, 0], name="a"))])
+    with pytest.raises(InputError, match="non-empty list"):
+        Stack(levels=[])
+    with pytest.raises(InputError, match="expected a Task"):
+        Level("end_effector")
+
+
+def test_stack_bind_error_carries_location(rov):
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0, 0, 0])),
+                          Level(PostureTask(), EndEffectorTask("gripper", name="g"))])
+    with pytest.raises(UnknownFrameError, match=r"levels\[1\]\.tasks\[1\] \(g\).*gripper"):
+        stack.bind(rov)
