@@ -298,16 +298,15 @@ def convert(value: Any, hint: Any, path: str) -> Any:
         return value
     members = _union_members(hint)
     if members is not None:
-        members = tuple(m for m in members if m is not type(None))
-        if len(members) == 1:
-            return convert(value, members[0], path)
         errors: list[ConfigError] = []
-        for member in members:
+        for member in (m for m in members if m is not type(None)):
             try:
                 return convert(value, member, path)
             except ConfigError as exc:
                 errors.append(exc)
-        return value if not errors else _raise_first(errors)
+        if errors:
+            raise errors[0]  # the first alternative's complaint, e.g. "expected a number"
+        return value
     origin = typing.get_origin(hint)
     if origin is Literal:
         choices = typing.get_args(hint)
@@ -339,10 +338,6 @@ def convert(value: Any, hint: Any, path: str) -> Any:
     if origin in (dict, Mapping) and not isinstance(value, dict):
         raise ConfigError(f"expected a table, got {describe(value)}", path)
     return value
-
-
-def _raise_first(errors: list[ConfigError]) -> Any:
-    raise errors[0]
 
 
 def _name_of(hint: Any) -> str:
