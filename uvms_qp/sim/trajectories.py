@@ -273,8 +273,8 @@ class CircleTrajectory(Trajectory):
         if norm < 1e-9:
             raise InputError("normal: expected a non-zero vector")
         n = n / norm
-        helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        e1 = helper - n * float(helper @ n)
+        seed = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        e1 = seed - n * float(seed @ n)
         self._e1 = e1 / np.linalg.norm(e1)
         self._e2 = np.cross(n, self._e1)
         self._rate = 2.0 * math.pi * self.turns / self.duration  # [rad/s]
