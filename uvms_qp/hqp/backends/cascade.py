@@ -307,11 +307,11 @@ def _polish_active_set(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Fl
                        act_tol: float = 1e-7) -> FloatArray:
     """Sharpen an inexact (interior-point / ADMM) answer on its own active set.
 
-    With ``J`` the constraints within ``act_tol`` (relative) of being active at ``z``, solve the equality-constrained
-    QP ``min 0.5 z'Pz + q'z  s.t.  G_J z = h_J`` through its KKT system (least squares, so dependent
-    rows are harmless). The polished point replaces ``z`` only if it is feasible (to 1e-10) and
-    does not increase the objective, so polishing can never make an answer worse. It removes the
-    ``sqrt(mu)`` errors interior-point methods leave on degenerate optima.
+    With ``J`` the constraints within ``act_tol`` (relative) of being active at ``z``, solve the
+    equality-constrained QP ``min 0.5 z'Pz + q'z  s.t.  G_J z = h_J`` through its KKT system
+    (least squares, so dependent rows are harmless). The polished point replaces ``z`` only if it
+    is feasible (to 1e-10) and does not increase the objective, so polishing never makes an answer
+    worse. It removes the ``sqrt(mu)`` errors interior-point methods leave on degenerate optima.
     """
     rows, rhs = [], []
     n = z.size
