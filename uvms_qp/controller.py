@@ -262,7 +262,8 @@ class Controller:
         self._tasks = tasks
         self._starts = np.asarray(starts, dtype=np.intp)
         self._level_ranges = level_ranges
-        self._equality_tasks = np.array([self._task_is_equality(t) for t in tasks], dtype=bool)
+        self._equality_tasks = np.array([t.equality_rows for t in tasks], dtype=bool)
+        self._row_is_equality = np.zeros(total, dtype=bool)  # refreshed every tick
         # hard rows
         row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
         box_cons = [c for c in self.stack.constraints if c.has_box]
@@ -277,10 +278,19 @@ class Controller:
             self._row_slots.append((c, self._HA[sl], self._Hlo[sl], self._Hhi[sl]))
             r += c.rows_dim
         self._box_cons = box_cons
-        self._lower = np.full(nv, -np.inf)
-        self._upper = np.full(nv, np.inf)
-        self._hard_block = Block(self._HA, self._Hlo, self._Hhi, np.ones(mh),
-                                 np.zeros(mh, dtype=bool), tuple(c.name for c in row_cons))
+        self._dynamic_box = [c for c in box_cons if not c.is_static]
+        self._static_lower = np.full(nv, -np.inf)
+        self._static_upper = np.full(nv, np.inf)
+        for c in box_cons:
+            if c.is_static:
+                c.fill_box(None, self.dt, self._static_lower, self._static_upper)  # type: ignore[arg-type]
+        self._lower = self._static_lower.copy()
+        self._upper = self._static_upper.copy()
+        if (self._lower > self._upper).any():
+            self._raise_empty_box(None)
+        self._hard_eq = np.zeros(mh, dtype=bool)
+        self._hard_block = Block(self._HA, self._Hlo, self._Hhi, np.ones(mh), self._hard_eq,
+                                 tuple(c.name for c in row_cons))
         self._problem = self._make_problem()
         self.level_names = tuple(level.names for level in levels)
         self._level_sizes = tuple(len(level) for level in levels)
@@ -288,16 +298,12 @@ class Controller:
         self._rate_units = tuple(t.rate_unit for t in tasks)
         self._error_units = tuple(t.error_unit for t in tasks)
 
-    @staticmethod
-    def _task_is_equality(task: Task) -> bool:
-        return bool(getattr(task, "mode", None) not in ("floor", "margin", "bound"))
-
     def _make_problem(self) -> Problem:
         """Problem whose blocks are views of the row buffers (filled in place every tick)."""
         nv = self.nv
         blocks: list[Block] = []
         if self.scheme == "weighted":
-            self._level_eq = [np.zeros(self._A.shape[0], dtype=bool)]
+            self._level_eq = [self._row_is_equality]
             self._w_level = np.ones(self._A.shape[0])
             blocks.append(Block(self._A, self._lo, self._hi, self._w_level, self._level_eq[0],
                                 self._task_names_flat()))
@@ -321,7 +327,7 @@ class Controller:
         else:
             self._level_eq = []
             for (r0, r1), level in zip(self._level_ranges, self.stack.levels, strict=True):
-                eq = np.zeros(r1 - r0, dtype=bool)
+                eq = self._row_is_equality[r0:r1]
                 self._level_eq.append(eq)
                 blocks.append(Block(self._A[r0:r1], self._lo[r0:r1], self._hi[r0:r1],
                                     self._w[r0:r1], eq, level.names))
@@ -376,18 +382,20 @@ class Controller:
 
     def _fill_box(self, state: State) -> None:
         lower, upper = self._lower, self._upper
-        lower.fill(-np.inf)
-        upper.fill(np.inf)
+        lower[:] = self._static_lower
+        upper[:] = self._static_upper
         dt = self.dt
-        for c in self._box_cons:
+        for c in self._dynamic_box:
             c.fill_box(state, dt, lower, upper)
         if (lower > upper).any():
             self._raise_empty_box(state)
 
-    def _raise_empty_box(self, state: State) -> None:
+    def _raise_empty_box(self, state: State | None) -> None:
         i = int(np.flatnonzero(self._lower > self._upper)[0])
         parts = []
         for c in self._box_cons:
+            if state is None and not c.is_static:
+                continue
             lo, hi = c.box(state, self.dt)
             if np.isfinite(lo[i]) or np.isfinite(hi[i]):
                 parts.append(f"{c.name} gives [{lo[i]:.4g}, {hi[i]:.4g}]")
@@ -409,19 +417,19 @@ class Controller:
         self._fill_box(state)
         for c, HA, Hlo, Hhi in self._row_slots:
             c.fill_rows(state, self.dt, HA, Hlo, Hhi)
+        if self._row_slots:
+            np.equal(self._Hlo, self._Hhi, out=self._hard_eq)
         A, lo, hi = self._A, self._lo, self._hi
         if not (math.isfinite(A.sum()) and not np.isnan(lo).any() and not np.isnan(hi).any()):
             self._raise_non_finite()
         problem = self._problem
+        np.equal(lo, hi, out=self._row_is_equality)
         if self.scheme == "nullspace":
             for block, idx in zip(problem.levels, self._ns_index, strict=True):
                 np.take(A, idx, axis=0, out=block.A)
                 np.take(lo, idx, out=block.lo)
                 np.take(hi, idx, out=block.hi)
                 np.take(self._w, idx, out=block.w)
-        else:
-            for block in problem.levels:
-                np.equal(block.lo, block.hi, out=block.eq)
         saturated = False
         if self.scheme == "nullspace":
             t0 = time.perf_counter()

@@ -37,6 +37,8 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
     type_name: ClassVar[str] = "constraint"
     unit: ClassVar[str] = "m/s, rad/s"
     has_box: ClassVar[bool] = False
+    is_static: ClassVar[bool] = False
+    """True when the box does not depend on the state (the controller then merges it once)."""
 
     def __init__(self, *, name: str | None = None) -> None:
         if name is not None and (not isinstance(name, str) or not name.strip()):

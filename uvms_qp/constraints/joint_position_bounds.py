@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
-from ..tasks._common import check_joint_list, joint_indices
+from ..tasks._common import check_joint_list, compact_index, joint_indices
 from .constraint import Constraint
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -61,16 +61,18 @@ class JointPositionBounds(Constraint):
             j = int(idx[finite][np.flatnonzero(lo[finite] > hi[finite])[0]])
             raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
                              f"limits of joint {model.joint_names[j]!r}")
-        self._idx = idx[finite]
-        self._cols = model.n_vehicle + self._idx
+        self._idx = compact_index(idx[finite])
+        self._cols = compact_index(model.n_vehicle + idx[finite])
         self._lo, self._hi = lo[finite], hi[finite]
         return 0
 
     def joint_band(self, q: FloatArray, dt: float) -> tuple[FloatArray, FloatArray]:
         """Rate bounds ``(lower, upper)`` [rad/s] of the constrained joints at angles ``q``."""
         k = self.gain / dt
-        lower = k * (self._lo - q)
-        upper = k * (self._hi - q)
+        lower = self._lo - q
+        lower *= k
+        upper = self._hi - q
+        upper *= k
         np.minimum(lower, 0.0, out=lower)
         np.maximum(upper, 0.0, out=upper)
         return lower, upper
@@ -79,8 +81,12 @@ class JointPositionBounds(Constraint):
         """Intersect the joint-rate bounds into the box."""
         cols = self._cols
         lo, hi = self.joint_band(state.joints[self._idx], dt)
-        lower[cols] = np.maximum(lower[cols], lo)
-        upper[cols] = np.minimum(upper[cols], hi)
+        if isinstance(cols, slice):  # views: intersect in place
+            np.maximum(lower[cols], lo, out=lower[cols])
+            np.minimum(upper[cols], hi, out=upper[cols])
+        else:
+            lower[cols] = np.maximum(lower[cols], lo)
+            upper[cols] = np.minimum(upper[cols], hi)
 
     def update(self, **params: Any) -> None:
         """Accepts ``gain``."""

@@ -29,6 +29,7 @@ class JointVelocityBounds(Constraint):
     type_name = "joint_velocity_bounds"
     unit = "rad/s"
     has_box = True
+    is_static = True
 
     def __init__(self, *, limits: list[float] | None = None, scale: float = 1.0,
                  joints: list[str] | None = None, name: str | None = None) -> None:

@@ -35,6 +35,7 @@ class VehicleRateBounds(Constraint):
     type_name = "vehicle_rate_bounds"
     unit = "m/s, rad/s"
     has_box = True
+    is_static = True
 
     def __init__(self, *, linear: float | None = None, angular: float | None = None,
                  limits: list[float] | None = None, scale: float = 1.0,

@@ -127,6 +127,14 @@ def eta_axes(model: Any) -> tuple[str, ...]:
     return ()
 
 
+def compact_index(indices: Any) -> Any:
+    """A slice when ``indices`` are consecutive (basic indexing: a view, no copy), else an array."""
+    idx = np.asarray(indices, dtype=int)
+    if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
+        return slice(int(idx[0]), int(idx[0]) + idx.size)
+    return idx
+
+
 ANGLE_AXES = frozenset({"phi", "theta", "psi"})
 
 _LAST_POSE_JACOBIAN: list[Any] = [None, None]

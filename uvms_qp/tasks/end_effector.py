@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ._common import TWIST_AXES, as_point, as_rotation, check_frame, parse_axes
+from ._common import TWIST_AXES, as_point, as_rotation, check_frame, compact_index, parse_axes
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -90,7 +90,6 @@ class EndEffectorTask(ErrorTask):
         self._sel = np.arange(0)
         self._need_p = mode != "orientation"
         self._need_o = mode != "position"
-        self._e6 = np.zeros(6)
         self._Jlog = np.eye(3)
         if position is not None or rotation is not None:
             self.set_target(position=position, rotation=rotation)
@@ -172,18 +171,16 @@ class EndEffectorTask(ErrorTask):
         else:
             axes = list(_MODE_AXES[self.mode])
         self.axes = axes
-        self._sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
-        if self.mode == "orientation":
-            self._sel_local = self._sel - 3
-        else:
-            self._sel_local = self._sel
+        sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
+        self._sel = compact_index(sel)
+        self._sel_local = compact_index(sel - 3) if self.mode == "orientation" else self._sel
         return len(axes)
 
     # -------------------------------------------------------------------------------- evaluation
     def compute_error(self, state: State, t: float) -> FloatArray:
         """Error ``[p_d - p; log(R_d R^T)]`` on the selected axes [m, rad], world axes."""
         self._sample(t)
-        e6 = self._e6
+        e6 = np.empty(6)
         if self._need_p:
             e6[:3] = self._p_d - state.position(self.frame)  # type: ignore[operator]
         if self._need_o:

@@ -106,6 +106,11 @@ class JointLimitTask(Task):
         self._A = np.zeros((0, 0))
         self.value = float("nan")
 
+    @property
+    def equality_rows(self) -> bool:
+        """False in mode ``'margin'`` (an inequality), True otherwise."""
+        return self.mode != "margin"
+
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")
         lo = np.asarray(model.joint_lower, dtype=float)[idx]

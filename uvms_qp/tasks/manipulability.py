@@ -236,6 +236,11 @@ class ManipulabilityTask(Task):
         self.value = float("nan")
         self.shaping = 0.0
 
+    @property
+    def equality_rows(self) -> bool:
+        """False in mode ``'floor'`` (an inequality), True otherwise."""
+        return self.mode != "floor"
+
     def _bind(self, model: Model) -> int:
         check_frame(model, self.frame, f"{self.name}.frame")
         if model.n_joints == 0:

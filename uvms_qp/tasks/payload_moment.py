@@ -79,6 +79,11 @@ class PayloadMomentTask(Task):
         self._nvh = 0
         self.value = float("nan")
 
+    @property
+    def equality_rows(self) -> bool:
+        """False in mode ``'bound'`` (an inequality), True otherwise."""
+        return self.mode != "bound"
+
     def _bind(self, model: Model) -> int:
         check_frame(model, self.frame, f"{self.name}.frame")
         if model.n_joints == 0:
@@ -88,12 +93,12 @@ class PayloadMomentTask(Task):
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
         """``(M, grad M)`` at ``state`` (gradient over the arm joints)."""
-        p = state.pose_in(self.frame, "arm_base")[:3, 3]
+        T_wb = state.pose("arm_base")
+        x, y, _ = (T_wb[:3, :3].T @ (state.position(self.frame) - T_wb[:3, 3])).tolist()
         Jp = state.arm_jacobian(self.frame, rows="position")
         F = self.force
-        M = (p[0] * p[0] + p[1] * p[1]) * F
-        grad = (2.0 * F) * (p[0] * Jp[0] + p[1] * Jp[1])
-        return float(M), grad
+        grad = (2.0 * F * x) * Jp[0] + (2.0 * F * y) * Jp[1]
+        return (x * x + y * y) * F, grad
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:

@@ -113,6 +113,11 @@ class Task(ABC):
         return self.model
 
     @property
+    def equality_rows(self) -> bool:
+        """True when every row is an equality (tasks with inequality rows override this)."""
+        return True
+
+    @property
     def row_weights(self) -> FloatArray:
         """Per-row weights (dim,), task weight included."""
         return self._row_weights
