@@ -36,21 +36,27 @@ from uvms_qp.tasks import (
 DT = 0.05
 
 
+class Sample:
+    """One trajectory sample (position-only)."""
+
+    __slots__ = ("angular_velocity", "position", "rotation", "velocity")
+
+    def __init__(self, position, velocity):
+        self.position, self.velocity = position, velocity
+        self.rotation = self.angular_velocity = None
+
+
 class Circle:
     def __init__(self, center, radius=0.15, period=8.0):
         self.c, self.r, self.w = np.asarray(center), radius, 2 * math.pi / period
         self.duration = period
 
     def sample(self, t):
-        class S:
-            rotation = None
-            angular_velocity = None
-
-        s = S()
         a = self.w * t
-        s.position = self.c + self.r * np.array([math.cos(a) - 1, math.sin(a), 0.0])
-        s.velocity = self.r * self.w * np.array([-math.sin(a), math.cos(a), 0.0])
-        return s
+        c, s = math.cos(a), math.sin(a)
+        r, rw = self.r, self.r * self.w
+        return Sample(self.c + np.array([r * (c - 1.0), r * s, 0.0]),
+                      np.array([-rw * s, rw * c, 0.0]))
 
 
 def stats(samples):

@@ -8,7 +8,9 @@ into buffers allocated once (no per-tick assembly of the problem), solves, and r
   at every level), with any back-end of :func:`uvms_qp.hqp.available_solvers`;
 * ``"weighted"``: one weighted QP, priorities turned into weights (level ``k`` of ``p`` gets its
   squared violations multiplied by ``priority_ratio ** (p - 1 - k)``), same hard bounds: the
-  usual "soft priorities" of weighted differential IK, for comparison;
+  usual "soft priorities" of weighted differential IK, for comparison. ``solver="daqp"`` is run
+  as the plain QP ``"cascade:daqp"`` (DAQP's hierarchical mode normalises soft rows and would
+  ignore the weights); very large ratios make the QP ill-conditioned (1e2-1e4 work well);
 * ``"nullspace"``: the closed-form recursive null-space scheme
   (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels, in the metric W of Eq. (17)):
   inequality rows are left out (the scheme has no notion of them) and the result is saturated
@@ -229,6 +231,10 @@ class Controller:
             raise InputError(f"metric: expected positive weights, got min {self.metric.min():g}")
         if scheme == "nullspace":
             solver = "nullspace"
+        elif scheme == "weighted" and solver == "daqp":
+            # DAQP's hierarchical mode normalises soft rows, which would erase the priority
+            # weights; one weighted QP through DAQP as a plain QP keeps them.
+            solver = "cascade:daqp"
         self._solver = HierarchySolver(solver, weights=self.metric, options=options)
         self.solver_name = self._solver.name
         self._build_buffers()

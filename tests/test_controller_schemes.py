@@ -1,0 +1,182 @@
+"""Controller: scheme identities from the papers, closed-loop behaviour, results and errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
+from uvms_qp.controller import Controller, StepResult
+from uvms_qp.errors import InputError, UnknownSolverError
+from uvms_qp.model import load_model
+from uvms_qp.stack import Level, Stack
+from uvms_qp.tasks import (
+    EndEffectorTask,
+    ManipulabilityTask,
+    PayloadMomentTask,
+    PostureTask,
+    StationKeepingTask,
+    motion_distribution_weights,
+)
+
+
+@pytest.fixture(scope="module")
+def rov():
+    return load_model("bluerov2_heavy_alpha5")
+
+
+def _equality_stack(model, rng):
+    q = model.random_configuration(rng)
+    state = model.state(q)
+    target = state.position("tool") + rng.normal(scale=0.1, size=3)
+    return state, Stack(levels=[
+        Level(EndEffectorTask(position=target, gain=1.5)),
+        Level(StationKeepingTask(target=list(rng.normal(scale=0.2, size=4)), gain=1.0)),
+        Level(PostureTask(posture=list(model.split(q)[1] + 0.1), gain=0.5)),
+    ])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_nullspace_scheme_equals_hqp_without_active_bounds(rov, seed):
+    """Equality levels, no bounds: the lexicographic QP is the recursive null-space solution
+    (000 Eq. (10) extended, weighted pseudoinverse of Eq. (17))."""
+    rng = np.random.default_rng(seed)
+    state, stack = _equality_stack(rov, rng)
+    W = motion_distribution_weights(rov, beta=0.7, w_max=0.5)
+    qp = Controller(rov, stack, solver="daqp", dt=0.05, metric=W).step(state)
+    ns = Controller(rov, stack, dt=0.05, metric=W, scheme="nullspace").step(state)
+    assert ns.solver == "nullspace" and not ns.saturated
+    np.testing.assert_allclose(qp.zeta, ns.zeta, atol=1e-6)
+
+
+def test_gradient_projection_identity_eq4():
+    """Tracking level + manipulability ascend level = J^+ x_dot + (I - J^+ J) lambda grad w."""
+    arm = load_model("nenchev_pa10_arm")
+    rng = np.random.default_rng(5)
+    q = arm.random_configuration(rng)
+    state = arm.state(q)
+    target = state.position("tool") + np.array([0.05, -0.02, 0.03])
+    ee = EndEffectorTask(position=target, gain=2.0)
+    manip = ManipulabilityTask(mode="ascend", gain=0.7)
+    result = Controller(arm, Stack(levels=[Level(ee), Level(manip)]), dt=0.05).step(state)
+    J = state.jacobian("tool", rows="position")
+    Jp = np.linalg.pinv(J)
+    _, grad = manip.compute_value(state)
+    expected = Jp @ (2.0 * (target - state.position("tool"))) + (
+        np.eye(arm.nv) - Jp @ J) @ (0.7 * grad)
+    np.testing.assert_allclose(result.zeta, expected, atol=1e-6)
+
+
+def test_weighted_scheme_only_approaches_priorities(rov):
+    """Priorities as weights: the top task gives way, less so as the ratio grows; the HQP meets it."""
+    rng = np.random.default_rng(2)
+    state, stack = _equality_stack(rov, rng)
+    hqp = Controller(rov, stack, dt=0.05).step(state)
+    assert hqp.level_violations[0] < 1e-8
+    top = []
+    for ratio in (1.0, 1e2, 1e4):
+        weighted = Controller(rov, stack, dt=0.05, scheme="weighted", priority_ratio=ratio)
+        assert weighted.solver_name == "cascade:daqp"  # DAQP's hierarchy would drop weights
+        top.append(weighted.step(state).level_violations[0])
+    assert top[0] > 1e-3 and top[0] > top[1] > top[2]
+
+
+def test_closed_loop_tracks_and_keeps_bounds(rov):
+    """Drive the tool toward a far target: joints stay inside their limits, rates within bounds,
+    the vehicle moves only when the arm cannot reach."""
+    q = rov.home()
+    p0 = rov.frame_pose(q, "tool")[:3, 3]
+    eta0, joints0 = rov.split(q)
+    reachable = rov.frame_pose(rov.configuration(eta0, joints0 + [0.2, 0.15, -0.2, 0.1]),
+                               "tool")[:3, 3]  # the arm alone reaches it
+    near = EndEffectorTask(position=reachable, gain=1.0, name="ee")
+    stack = Stack(
+        levels=[Level(near), Level(StationKeepingTask(axes=["x", "y", "z", "phi", "theta", "psi"]))],
+        constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds(),
+                     VehicleRateBounds(linear=0.3, angular=0.2)])
+    ctrl = Controller(rov, stack, dt=0.05)
+    for k in range(100):
+        result = ctrl.step(rov.state(q), 0.05 * k)
+        assert result.ok and result.bound_violation <= 1e-7
+        q = rov.integrate(q, result.zeta, 0.05)
+    assert np.linalg.norm(rov.frame_pose(q, "tool")[:3, 3] - reachable) < 1e-3
+    assert np.abs(rov.split(q)[0] - eta0).max() < 1e-6  # reachable: vehicle holds station
+    near.set_target(position=p0 + [1.0, 0.0, 0.0])  # beyond the arm's reach
+    for k in range(80):
+        result = ctrl.step(rov.state(q), 5.0 + 0.05 * k)
+        assert result.bound_violation <= 1e-7
+        np.testing.assert_array_less(np.abs(result.zeta[:3]), 0.3 + 1e-9)
+        q = rov.integrate(q, result.zeta, 0.05)
+        joints = rov.split(q)[1]
+        assert np.all(joints >= rov.joint_lower - 1e-9) and np.all(joints <= rov.joint_upper + 1e-9)
+    assert np.linalg.norm(rov.split(q)[0][:3] - eta0[:3]) > 0.3  # now the vehicle helps
+
+
+def test_payload_pickup_reduces_the_moment(rov):
+    q = rov.home()
+    p0 = rov.frame_pose(q, "tool")[:3, 3]
+    payload = PayloadMomentTask(force=0.0, gain=0.3)
+    stack = Stack(levels=[Level(EndEffectorTask(position=p0, gain=2.0)),
+                          Level(payload), Level(StationKeepingTask())],
+                  constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds()])
+    ctrl = Controller(rov, stack, dt=0.05)
+    for k in range(5):  # no payload: nothing moves
+        result = ctrl.step(rov.state(q), 0.05 * k)
+        q = rov.integrate(q, result.zeta, 0.05)
+    np.testing.assert_allclose(result.zeta, 0.0, atol=1e-9)
+    payload.update(force=20.0)  # picked up
+    m_start, _ = payload.compute_value(rov.state(q))
+    for k in range(100):
+        q = rov.integrate(q, ctrl.step(rov.state(q), 0.25 + 0.05 * k).zeta, 0.05)
+    m_end, _ = payload.compute_value(rov.state(q))
+    assert m_end < 0.8 * m_start
+    assert np.linalg.norm(rov.frame_pose(q, "tool")[:3, 3] - p0) < 1e-3  # tool held in place
+
+
+def test_manipulability_floor_holds_in_closed_loop(rov):
+    q = rov.home()
+    manip = ManipulabilityTask(mode="floor", minimum=0.0, gain=5.0)
+    w0, _ = manip.bind(rov).compute_value(rov.state(q))
+    manip.update(minimum=0.8 * w0)
+    p0 = rov.frame_pose(q, "tool")[:3, 3]
+    stack = Stack(levels=[Level(manip), Level(EndEffectorTask(position=p0 + [0.5, 0, 0]))],
+                  constraints=[JointVelocityBounds(), VehicleRateBounds(linear=0.2, angular=0.2)])
+    ctrl = Controller(rov, stack, dt=0.05)
+    lowest = w0
+    for k in range(80):
+        q = rov.integrate(q, ctrl.step(rov.state(q), 0.05 * k).zeta, 0.05)
+        lowest = min(lowest, manip.compute_value(rov.state(q))[0])
+    assert lowest >= 0.8 * w0 * (1 - 1e-2)
+
+
+def test_step_result_reports_residuals_with_units(rov):
+    state = rov.state(rov.home())
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0, 0, 0], name="reach")),
+                          Level(PostureTask(), StationKeepingTask())])
+    result = Controller(rov, stack, dt=0.05).step(state, 1.5)
+    assert isinstance(result, StepResult)
+    assert set(result.task_residuals) == {"reach", "posture", "station_keeping"}
+    norm, unit = result.task_residuals["reach"]
+    assert unit == "m/s, rad/s" and norm >= 0.0
+    assert result.task_errors["reach"][0] == pytest.approx(
+        np.linalg.norm(state.position("tool")), rel=1e-12)
+    text = result.summary()
+    for word in ("reach", "posture", "station_keeping", "[rad/s]", "level 1", result.status.value):
+        assert word in text
+    assert result.step_time > 0 and result.t == 1.5 and np.all(np.isfinite(result.zeta))
+
+
+def test_controller_rejects_bad_input(rov):
+    stack = Stack(levels=[Level(PostureTask())])
+    with pytest.raises(InputError, match="dt"):
+        Controller(rov, stack, dt=0.0)
+    with pytest.raises(InputError, match="scheme"):
+        Controller(rov, stack, scheme="fuzzy")
+    with pytest.raises(InputError, match="metric"):
+        Controller(rov, stack, metric=[1.0, 2.0])
+    with pytest.raises(UnknownSolverError):
+        Controller(rov, stack, solver="cplex")
+    other = load_model("wang_9dof")
+    ctrl = Controller(rov, stack)
+    with pytest.raises(InputError, match="another model"):
+        ctrl.step(other.state(other.neutral()))
