@@ -68,7 +68,7 @@ def test_gradient_projection_identity_eq4():
 
 
 def test_weighted_scheme_only_approaches_priorities(rov):
-    """Priorities as weights: the top task gives way, less so as the ratio grows; the HQP meets it."""
+    """Priorities as weights: the top task gives way (less as the ratio grows); HQP meets it."""
     rng = np.random.default_rng(2)
     state, stack = _equality_stack(rov, rng)
     hqp = Controller(rov, stack, dt=0.05).step(state)
@@ -87,11 +87,12 @@ def test_closed_loop_tracks_and_keeps_bounds(rov):
     q = rov.home()
     p0 = rov.frame_pose(q, "tool")[:3, 3]
     eta0, joints0 = rov.split(q)
-    reachable = rov.frame_pose(rov.configuration(eta0, joints0 + [0.2, 0.15, -0.2, 0.1]),
+    reachable = rov.frame_pose(rov.configuration(eta0, joints0 + np.array([0.2, 0.15, -0.2, 0.1])),
                                "tool")[:3, 3]  # the arm alone reaches it
     near = EndEffectorTask(position=reachable, gain=1.0, name="ee")
     stack = Stack(
-        levels=[Level(near), Level(StationKeepingTask(axes=["x", "y", "z", "phi", "theta", "psi"]))],
+        levels=[Level(near),
+                Level(StationKeepingTask(axes=["x", "y", "z", "phi", "theta", "psi"]))],
         constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds(),
                      VehicleRateBounds(linear=0.3, angular=0.2)])
     ctrl = Controller(rov, stack, dt=0.05)
@@ -101,7 +102,7 @@ def test_closed_loop_tracks_and_keeps_bounds(rov):
         q = rov.integrate(q, result.zeta, 0.05)
     assert np.linalg.norm(rov.frame_pose(q, "tool")[:3, 3] - reachable) < 1e-3
     assert np.abs(rov.split(q)[0] - eta0).max() < 1e-6  # reachable: vehicle holds station
-    near.set_target(position=p0 + [1.0, 0.0, 0.0])  # beyond the arm's reach
+    near.set_target(position=p0 + np.array([1.0, 0.0, 0.0]))  # beyond the arm's reach
     for k in range(80):
         result = ctrl.step(rov.state(q), 5.0 + 0.05 * k)
         assert result.bound_violation <= 1e-7
@@ -139,7 +140,8 @@ def test_manipulability_floor_holds_in_closed_loop(rov):
     w0, _ = manip.bind(rov).compute_value(rov.state(q))
     manip.update(minimum=0.8 * w0)
     p0 = rov.frame_pose(q, "tool")[:3, 3]
-    stack = Stack(levels=[Level(manip), Level(EndEffectorTask(position=p0 + [0.5, 0, 0]))],
+    far = EndEffectorTask(position=p0 + np.array([0.5, 0.0, 0.0]))
+    stack = Stack(levels=[Level(manip), Level(far)],
                   constraints=[JointVelocityBounds(), VehicleRateBounds(linear=0.2, angular=0.2)])
     ctrl = Controller(rov, stack, dt=0.05)
     lowest = w0
