@@ -318,7 +318,7 @@ class Controller:
             self._ns_index: list[np.ndarray] = []
             k = 0
             for level in self.stack.levels:
-                keep = []
+                keep: list[int] = []
                 for _task in level:
                     sl = self._task_slices[k]
                     if self._equality_tasks[k]:
@@ -402,7 +402,7 @@ class Controller:
         for c in self._box_cons:
             if state is None and not c.is_static:
                 continue
-            lo, hi = c.box(state, self.dt)
+            lo, hi = c.box(state, self.dt)  # type: ignore[arg-type]
             if np.isfinite(lo[i]) or np.isfinite(hi[i]):
                 parts.append(f"{c.name} gives [{lo[i]:.4g}, {hi[i]:.4g}]")
         name = self.model.zeta_names[i]

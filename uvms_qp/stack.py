@@ -45,13 +45,12 @@ class Level:
                 items.extend(item)
             else:
                 items.append(item)
+        label = f"level {name!r}" if name else "level"
         if not items:
-            raise InputError(f"level {name or ''}: a level needs at least one task".replace(
-                "level : ", "level: "))
+            raise InputError(f"{label}: a level needs at least one task")
         for i, task in enumerate(items):
             if not isinstance(task, Task):
-                raise InputError(f"level {name or ''} item {i}: expected a Task, got "
-                                 f"{type(task).__name__}")
+                raise InputError(f"{label} item {i}: expected a Task, got {type(task).__name__}")
         self.tasks: tuple[Task, ...] = tuple(items)
         self.name = name
 

@@ -184,7 +184,7 @@ class EndEffectorTask(ErrorTask):
         if self._need_p:
             e6[:3] = self._p_d - state.position(self.frame)  # type: ignore[operator]
         if self._need_o:
-            R_e = self._R_d @ state.rotation(self.frame).T  # type: ignore[union-attr]
+            R_e = self._R_d @ state.rotation(self.frame).T  # type: ignore[operator]
             e6[3:] = pin.log3(R_e)
             self._Jlog = pin.Jlog3(R_e)
         return e6[self._sel]

@@ -43,13 +43,13 @@ def _scaled_pinv_t(Js: FloatArray) -> tuple[float, FloatArray]:
     det = float(np.linalg.det(G)) if G.shape[0] > 0 else 1.0
     w = math.sqrt(det) if det > 0.0 else 0.0
     if w < 1e-12 * max(1.0, float(np.abs(G).max(initial=0.0))) ** (0.5 * G.shape[0]):
-        return w, w * np.linalg.pinv(Js).T
+        return w, np.asarray(w * np.linalg.pinv(Js).T, dtype=np.float64)
     if k <= n:
-        return w, w * np.linalg.solve(G, Js)
-    return w, w * (Js @ np.linalg.inv(G))
+        return w, np.asarray(w * np.linalg.solve(G, Js), dtype=np.float64)
+    return w, np.asarray(w * (Js @ np.linalg.inv(G)), dtype=np.float64)
 
 
-def _position_pinv_cols(cols: list[list[float]]) -> tuple[float, list[tuple[float, ...]]] | None:
+def _position_pinv_cols(cols: list[list[float]]) -> tuple[float, list[Any]] | None:
     """Fast path of :func:`_scaled_pinv_t` for the 3 position rows, in plain floats.
 
     ``cols`` are the columns ``[v; w]`` of the twist Jacobian; returns ``(w, columns of
@@ -72,7 +72,7 @@ def _position_pinv_cols(cols: list[list[float]]) -> tuple[float, list[tuple[floa
         return None
     w = math.sqrt(det)
     s = 1.0 / w
-    out = [((A0 * v0 + A1 * v1 + A2 * v2) * s, (A1 * v0 + A4 * v1 + A5 * v2) * s,
+    out: list[Any] = [((A0 * v0 + A1 * v1 + A2 * v2) * s, (A1 * v0 + A4 * v1 + A5 * v2) * s,
             (A2 * v0 + A5 * v1 + A8 * v2) * s, 0.0, 0.0, 0.0) for v0, v1, v2, *_ in cols]
     return w, out
 
