@@ -141,7 +141,7 @@ def main() -> None:
     solve_only = []
     for _ in range(500):
         start = time.perf_counter()
-        ctrl._solver.solve_problem(ctrl._problem)
+        ctrl._solver.solve_problem(ctrl._new_problem())
         solve_only.append(time.perf_counter() - start)
     fill_only = []
     for _ in range(500):

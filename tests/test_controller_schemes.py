@@ -182,3 +182,41 @@ def test_controller_rejects_bad_input(rov):
     ctrl = Controller(rov, stack)
     with pytest.raises(InputError, match="another model"):
         ctrl.step(other.state(other.neutral()))
+
+
+def test_shaping_level_reproduces_eq21_on_the_planar_urvm():
+    """Paper 000, Eq. (21), unweighted, no bounds: tracking level + [station keeping blended by
+    (1 - k); manipulability shaping] level equals the closed form
+    J_p^+ (x_dot + K_p e_p) + (I - J_p^+ J_p)((1 - k) J_s^+ K_s e_s + k s lambda grad rho)."""
+    model = load_model("soylu_planar")
+    q = model.configuration([0.1, -0.2, 0.3], [np.pi / 3, -np.pi / 3, np.pi / 3])
+    state = model.state(q)
+    manip = ManipulabilityTask(mode="shaping", threshold=1.0, gain=10.0, name="dex")
+    w, grad = manip.bind(model).compute_value(state)
+    manip.update(threshold=1.5 * w)  # 1/2 < w / threshold < 1: 0 < k < 1
+    k = manip.shaping_factor(state)
+    assert 0.05 < k < 0.95
+    target = state.position("tool") + np.array([0.1, 0.05, 0.0])
+    held = np.array([0.0, 0.0, 0.0])
+    station = StationKeepingTask(target=list(held), gain=[10.0, 10.0, 100.0], blend="dex")
+    stack = Stack(levels=[Level(EndEffectorTask(position=target, gain=10.0)),
+                          Level(station, manip)])
+    zeta = Controller(model, stack, dt=0.05).step(state, 0.0).zeta
+    Jp = state.jacobian("tool", rows="position")[:2]
+    Js = state.vehicle_pose_jacobian()
+    e_s = held - model.split(q)[0]
+    rho_grad = np.r_[np.zeros(3), grad]
+    Jp_pinv = np.linalg.pinv(Jp)
+    secondary = (1 - k) * np.linalg.pinv(Js) @ (np.array([10.0, 10.0, 100.0]) * e_s) \
+        + k * 10.0 * rho_grad  # sign switch open at the first tick (rho_dot = 0)
+    expected = Jp_pinv @ (10.0 * (target - state.position("tool"))[:2]) \
+        + (np.eye(6) - Jp_pinv @ Jp) @ secondary
+    np.testing.assert_allclose(zeta, expected, atol=1e-6)
+
+
+def test_blend_must_name_a_shaping_task(rov):
+    with pytest.raises(InputError, match="no task named 'dex'"):
+        Stack(levels=[Level(StationKeepingTask(blend="dex"))]).bind(rov)
+    with pytest.raises(InputError, match="mode 'shaping'"):
+        Stack(levels=[Level(StationKeepingTask(blend="m"),
+                            ManipulabilityTask(mode="ascend", name="m"))]).bind(rov)

@@ -341,7 +341,27 @@ class Controller:
             lower, upper = np.full(nv, -np.inf), np.full(nv, np.inf)
         else:
             lower, upper = self._lower, self._upper
-        return Problem(nv, tuple(blocks), self._hard_block, lower, upper, self.metric)
+        self._blocks = tuple(blocks)
+        self._problem_box = (lower, upper)
+        self._stacked = (Block(self._A, self._lo, self._hi, self._w, self._row_is_equality,
+                               self._task_names_flat())
+                         if self.scheme == "hqp" and len(blocks) > 1 else None)
+        return self._new_problem()
+
+    def _new_problem(self) -> Problem:
+        """A fresh Problem over the (in-place filled) buffers.
+
+        A new object every tick: the solver layer may cache values derived from a problem
+        (stacked rows, scales), which must not survive a change of the buffers. The stacked
+        rows of all levels are exactly the controller's contiguous row buffer, so that view is
+        handed over instead of a copy.
+        """
+        lower, upper = self._problem_box
+        problem = Problem(self.nv, self._blocks, self._hard_block, lower, upper, self.metric)
+        if self._stacked is not None and isinstance(
+                getattr(Problem, "stacked", None), cached_property):
+            problem.__dict__["stacked"] = self._stacked
+        return problem
 
     def _task_names_flat(self) -> tuple[str, ...]:
         return tuple(t.name for t in self._tasks)
@@ -428,8 +448,8 @@ class Controller:
         A, lo, hi = self._A, self._lo, self._hi
         if not (math.isfinite(A.sum()) and not np.isnan(lo).any() and not np.isnan(hi).any()):
             self._raise_non_finite()
-        problem = self._problem
         np.equal(lo, hi, out=self._row_is_equality)
+        problem = self._new_problem()
         if self.scheme == "nullspace":
             for block, idx in zip(problem.levels, self._ns_index, strict=True):
                 np.take(A, idx, axis=0, out=block.A)

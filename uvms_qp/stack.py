@@ -154,6 +154,15 @@ class Stack:
                     exc.args = (f"levels[{k}].tasks[{i}] ({task.name}): {exc}",
                                 *exc.args[1:]) if exc.args else exc.args
                     raise
+        by_name = {t.name: t for t in self.tasks}
+        for k, level in enumerate(self.levels):
+            for i, task in enumerate(level):
+                try:
+                    task.link(by_name)
+                except Exception as exc:
+                    exc.args = (f"levels[{k}].tasks[{i}] ({task.name}): {exc}",
+                                *exc.args[1:]) if exc.args else exc.args
+                    raise
         for i, c in enumerate(self.constraints):
             try:
                 c.bind(model)

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import eta_axes, vehicle_pose_jacobian, wrap_angle
+from ._common import eta_axes, vehicle_pose_jacobian
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -62,7 +62,6 @@ class CurrentAlignmentTask(ErrorTask):
         if direction is not None:
             self._apply_update("direction", direction)
         self._row = 0
-        self._e = np.zeros(1)
 
     def _bind(self, model: Model) -> int:
         axes = eta_axes(model)
@@ -78,8 +77,8 @@ class CurrentAlignmentTask(ErrorTask):
         if self.heading is None:
             raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
                              "direction=, or call update(heading=...)")
-        self._e[0] = wrap_angle(self.heading + self.offset - float(state.eta[self._row]))
-        return self._e
+        e = (self.heading + self.offset - float(state.eta[self._row]) + math.pi) % (2 * math.pi)
+        return np.array((e - math.pi,))
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Yaw row of the vehicle-pose Jacobian (1, nv)."""

@@ -178,8 +178,9 @@ class ManipulabilityTask(Task):
       :func:`shaping_function` ``k`` with the threshold ``rho_bar``, and the sign switch that
       only intervenes while ``w`` is not increasing (``sign(w_dot) = -1`` for ``w_dot <= 0``);
       ``w_dot`` is the finite difference of ``w`` between evaluations (0 at the first one).
-      Place it in the same level as a :class:`StationKeepingTask`: the level's demand then
-      reads ``[vehicle: station keeping; arm: k s lambda grad w]`` as in Eq. (21).
+      Place it in the same level as a ``StationKeepingTask(blend=<this task's name>)``, whose
+      demand is then scaled by ``1 - k``: the level asks
+      ``[vehicle: (1 - k) K_s e_s; arm: k s lambda grad w]``, the secondary term of Eq. (21).
 
     Args:
         mode: ``"ascend"``, ``"floor"`` or ``"shaping"``.
@@ -235,6 +236,7 @@ class ManipulabilityTask(Task):
         self._w_dot = 0.0
         self.value = float("nan")
         self.shaping = 0.0
+        self._cache: tuple[Any, float, FloatArray] = (None, 0.0, np.zeros(0))
 
     @property
     def equality_rows(self) -> bool:
@@ -260,9 +262,22 @@ class ManipulabilityTask(Task):
         self._w_dot = 0.0
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
-        """``(w, grad w)`` at ``state`` (gradient over the arm joints, (n_joints,))."""
-        return manipulability_and_gradient(state.arm_jacobian(self.frame, rows="twist"),
+        """``(w, grad w)`` at ``state`` (gradient over the arm joints, (n_joints,)).
+
+        The last state's values are kept (compared by identity), so a task that reads them in
+        the same tick (a blended :class:`StationKeepingTask`) does not recompute them.
+        """
+        cached = self._cache
+        if cached[0] is state:
+            return cached[1], cached[2]
+        w, g = manipulability_and_gradient(state.arm_jacobian(self.frame, rows="twist"),
                                            self._sel)
+        self._cache = (state, w, g)
+        return w, g
+
+    def shaping_factor(self, state: State) -> float:
+        """``k(w)`` of :func:`shaping_function` at ``state`` (mode ``"shaping"``)."""
+        return shaping_function(self.compute_value(state)[0], self.threshold)  # type: ignore[arg-type]
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:

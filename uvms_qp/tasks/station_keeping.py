@@ -36,6 +36,9 @@ class StationKeepingTask(ErrorTask):
             default ``x, y, z, psi`` (planar ``x, y, psi``). Roll/pitch only if actuated.
         target: Set point for the selected coordinates [m, rad], or None (see ``hold``).
         hold: ``"activation"`` or ``"current"`` when no target is given.
+        blend: Name of a :class:`~uvms_qp.tasks.ManipulabilityTask` in mode ``"shaping"`` of the
+            same stack: the demand is scaled by ``1 - k(w)`` (``000_7b5f597fe4e36aa4.txt,
+            Eq. (21)``: station keeping gives way to singularity avoidance as ``w`` drops).
         gain: Gain K [1/s], scalar or per coordinate.
         weight: Weight within the level.
         name: Task name (default ``"station_keeping"``).
@@ -51,6 +54,7 @@ class StationKeepingTask(ErrorTask):
         axes: list[str] | None = None,
         target: list[float] | None = None,
         hold: Literal["activation", "current"] = "activation",
+        blend: str | None = None,
         gain: float | list[float] = 1.0,
         weight: float = 1.0,
         name: str | None = None,
@@ -60,6 +64,10 @@ class StationKeepingTask(ErrorTask):
         if hold not in ("activation", "current"):
             raise InputError(f"{self.name}.hold: expected 'activation' or 'current', got {hold!r}")
         self.hold = hold
+        if blend is not None and (not isinstance(blend, str) or not blend):
+            raise InputError(f"{self.name}.blend: expected a task name, got {blend!r}")
+        self.blend = blend
+        self._blend_task: Any = None
         self._target_arg = None if target is None else as_vector(target, f"{self.name}.target")
         self.axes: list[str] = []
         self._idx = np.zeros(0, dtype=int)
@@ -91,6 +99,19 @@ class StationKeepingTask(ErrorTask):
         self._target = None if self._target_arg is None else self._target_arg.copy()
         return len(axes)
 
+    def link(self, tasks: dict[str, Any]) -> None:
+        """Find the manipulability task named by ``blend``."""
+        if self.blend is None:
+            return
+        other = tasks.get(self.blend)
+        if other is None:
+            raise InputError(f"{self.name}.blend: no task named {self.blend!r}; known tasks: "
+                             f"{', '.join(tasks)}")
+        if getattr(other, "type_name", "") != "manipulability" or other.mode != "shaping":
+            raise InputError(f"{self.name}.blend: {self.blend!r} is not a manipulability task "
+                             "in mode 'shaping'")
+        self._blend_task = other
+
     def reset(self) -> None:
         """Forget the activation pose (a new one is taken at the next evaluation)."""
         self._target = None if self._target_arg is None else self._target_arg.copy()
@@ -116,6 +137,8 @@ class StationKeepingTask(ErrorTask):
         e = self._target - eta
         if self._angle.any():
             e[self._angle] = wrap_angle(e[self._angle])
+        if self._blend_task is not None:
+            e *= 1.0 - self._blend_task.shaping_factor(state)
         return e
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:

@@ -99,6 +99,13 @@ class Task(ABC):
     def _bind(self, model: Model) -> int:
         """Validate against ``model``, precompute indices; return the number of rows."""
 
+    def link(self, tasks: dict[str, Task]) -> None:  # noqa: B027 - optional hook
+        """Resolve references to other tasks of the same stack (called by ``Stack.bind``).
+
+        Args:
+            tasks: Every task of the stack by name.
+        """
+
     def _update_row_weights(self) -> None:  # noqa: B027 - optional hook
         """Hook for tasks with per-row weights (called after bind and after weight updates)."""
 
