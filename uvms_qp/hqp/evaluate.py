@@ -26,9 +26,7 @@ def hard_violation(problem: Problem, x: FloatArray) -> float:
 
 def hard_scale(problem: Problem) -> float:
     """Magnitude of the finite hard sides: ``max(1, max |finite bound or side|)``."""
-    sides = np.concatenate((problem.lower, problem.upper, problem.hard.lo, problem.hard.hi))
-    finite = sides[np.isfinite(sides)]
-    return float(max(1.0, np.abs(finite).max())) if finite.size else 1.0
+    return problem.hard_scale
 
 
 def polish_hard(problem: Problem, x: FloatArray) -> FloatArray:
@@ -94,23 +92,33 @@ def evaluate(
             status = Status.BACKEND_ERROR
             message = (message + "; " if message else "") + "back-end returned no finite x"
         x = safe_x(problem, x)
-    slacks = [block.violation(x) for block in problem.levels]
-    residuals = [float(np.sqrt(b.w @ (s * s))) for b, s in zip(problem.levels, slacks, strict=True)]
+    stacked = problem.stacked
+    if stacked.m:
+        y = stacked.A @ x
+        s_all = y - np.minimum(np.maximum(y, stacked.lo), stacked.hi)
+        sq = np.add.reduceat(stacked.w * s_all * s_all, problem.offsets) if len(
+            problem.levels) == len(problem.offsets) and all(b.m for b in problem.levels) else (
+            np.array([b.w @ (v * v) for b, v in zip(
+                problem.levels, np.split(s_all, problem.offsets[1:]), strict=True)]))
+        slacks = np.split(s_all, problem.offsets[1:])
+        res = np.sqrt(sq)
+    else:
+        slacks = [np.zeros(0) for _ in problem.levels]
+        res = np.zeros(len(problem.levels))
+    residuals = res.tolist()
     hv = hard_violation(problem, x)
     infeasible_level = None
     if status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
-        if hv > hard_tol * hard_scale(problem):
+        if hv > hard_tol * problem.hard_scale:
             status = Status.BACKEND_ERROR
             message = (message + "; " if message else "") + f"hard rows violated by {hv:.2e}"
         else:
             status = Status.OPTIMAL
-            for k, (block, r) in enumerate(zip(problem.levels, residuals, strict=True)):
-                if r > level_tol * block.scale():
-                    infeasible_level = k
-                    status = Status.LEVEL_INFEASIBLE
-                    break
-    tol_lo = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(problem.lower), problem.lower, 0.0)))
-    tol_hi = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(problem.upper), problem.upper, 0.0)))
+            unmet = np.flatnonzero(res > level_tol * problem.level_scales)
+            if unmet.size:
+                infeasible_level = int(unmet[0])
+                status = Status.LEVEL_INFEASIBLE
+    tol_lo, tol_hi = problem.active_tol
     return HierarchyResult(
         x=x,
         status=status,

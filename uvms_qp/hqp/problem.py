@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -99,6 +100,43 @@ class Problem:
     def all_equality(self) -> bool:
         """True when every level holds only equality rows."""
         return all(level.all_equality for level in self.levels)
+
+    @cached_property
+    def stacked(self) -> Block:
+        """All level rows stacked in priority order (computed once per problem)."""
+        if len(self.levels) == 1:
+            return self.levels[0]
+        if not self.levels:
+            return Block(np.zeros((0, self.n)), np.zeros(0), np.zeros(0), np.zeros(0),
+                         np.zeros(0, dtype=bool))
+        return Block(np.vstack([b.A for b in self.levels]),
+                     np.concatenate([b.lo for b in self.levels]),
+                     np.concatenate([b.hi for b in self.levels]),
+                     np.concatenate([b.w for b in self.levels]),
+                     np.concatenate([b.eq for b in self.levels]))
+
+    @cached_property
+    def offsets(self) -> np.ndarray:
+        """Index of the first stacked row of each level."""
+        return np.cumsum([0] + [b.m for b in self.levels[:-1]]).astype(np.intp)
+
+    @cached_property
+    def level_scales(self) -> np.ndarray:
+        """``max(1, max |finite side|)`` of each level (for relative tolerances)."""
+        return np.array([b.scale() for b in self.levels])
+
+    @cached_property
+    def hard_scale(self) -> float:
+        """``max(1, max |finite bound or hard side|)``."""
+        sides = np.concatenate((self.lower, self.upper, self.hard.lo, self.hard.hi))
+        finite = sides[np.isfinite(sides)]
+        return float(max(1.0, np.abs(finite).max())) if finite.size else 1.0
+
+    @cached_property
+    def active_tol(self) -> tuple[np.ndarray, np.ndarray]:
+        """Tolerances deciding that a bound is active: ``1e-9 (1 + |bound|)``."""
+        return (1e-9 * (1.0 + np.abs(np.where(np.isfinite(self.lower), self.lower, 0.0))),
+                1e-9 * (1.0 + np.abs(np.where(np.isfinite(self.upper), self.upper, 0.0))))
 
 
 def _as_rows(item: Any, label: str) -> Rows:

@@ -126,7 +126,7 @@ SOLVERS: tuple[SolverSpec, ...] = (
              freeze_margin=1e-8, sparse=True, tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10),
     _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-4, freeze_margin=1e-8,
              sparse=True, qp_regularization_value=1e-11, primal_feasibility_tolerance=1e-10,
-             dual_feasibility_tolerance=1e-10),
+             dual_feasibility_tolerance=1e-10, time_limit=1.0, qp_iteration_limit=10_000),
     _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-6,
              sparse=True,
              eps_abs=1e-8, eps_rel=1e-8, max_iter=20_000, polishing=True),

@@ -63,29 +63,39 @@ class DaqpHierarchicalBackend:
         self._key: tuple[object, ...] | None = None
         self._H: np.ndarray | None = None
         self._f: np.ndarray | None = None
+        self._W: np.ndarray | None = None
         self._sense = np.zeros(0, dtype=np.intc)
 
     def _arrays(self, problem: Problem) -> tuple[np.ndarray, ...]:
-        blocks = (problem.hard, *problem.levels)
-        n = problem.n
-        A = np.vstack([b.A for b in blocks]) if len(blocks) > 1 else problem.hard.A
-        bu = np.concatenate([problem.upper, *(b.hi for b in blocks)])
-        bl = np.concatenate([problem.lower, *(b.lo for b in blocks)])
-        np.clip(bu, -_INF, _INF, out=bu)
-        np.clip(bl, -_INF, _INF, out=bl)
-        sense = np.zeros(bu.size, dtype=np.intc)
-        if problem.hard.m:
-            sense[n : n + problem.hard.m][problem.hard.eq] = 5
-        sizes = np.array([n + problem.hard.m] + [b.m for b in problem.levels])
+        stacked = problem.stacked
+        hard = problem.hard
+        A = stacked.A if not hard.m else np.vstack((hard.A, stacked.A))
+        bu = np.concatenate((problem.upper, hard.hi, stacked.hi))
+        bl = np.concatenate((problem.lower, hard.lo, stacked.lo))
+        np.minimum(bu, _INF, out=bu)
+        np.maximum(bl, -_INF, out=bl)
+        return A, bu, bl
+
+    def _structure(self, problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+        n, hard = problem.n, problem.hard
+        sense = np.zeros(n + hard.m + problem.stacked.m, dtype=np.intc)
+        if hard.m:
+            sense[n : n + hard.m][hard.eq] = 5
+        sizes = np.array([n + hard.m] + [b.m for b in problem.levels])
         bp = np.unique(np.cumsum(sizes)).astype(np.intc)
-        self._sense = sense
-        return A, bu, bl, sense, bp
+        return sense, bp
 
     def solve(self, problem: Problem) -> BackendOutput:
-        """Solve all levels in one DAQP call and clip round-off outside the box."""
-        A, bu, bl, sense, bp = self._arrays(problem)
-        key = (problem.n, A.shape[0], bp.tobytes(), sense.tobytes(), problem.W.tobytes())
-        if key != self._key:
+        """Solve all levels in one DAQP call, then clip/project round-off into the hard set."""
+        A, bu, bl = self._arrays(problem)
+        hard = problem.hard
+        key = (problem.n, hard.m, tuple(b.m for b in problem.levels),
+               hard.eq.tobytes() if hard.m else b"")
+        W_same = self._W is not None and np.array_equal(problem.W, self._W)
+        if key != self._key or not W_same:
+            sense, bp = self._structure(problem)
+            self._sense = sense
+            self._W = problem.W.copy()
             self._H = np.diag(problem.W)
             self._f = np.zeros(problem.n)
             self._model = self._daqp.Model()
@@ -94,9 +104,9 @@ class DaqpHierarchicalBackend:
                 self._key = None
                 return BackendOutput(None, Status.BACKEND_ERROR,
                                      f"DAQP setup failed (exit flag {flag})", {"exitflag": flag})
-            s = self._model.settings
-            s.update(self._daqp_settings)
-            self._model.settings = s
+            settings = self._model.settings
+            settings.update(self._daqp_settings)
+            self._model.settings = settings
             self._key = key
         else:
             self._model.update(A=A, bupper=bu, blower=bl)
@@ -151,7 +161,5 @@ def _box_rows_violation(problem: Problem, x: np.ndarray) -> float:
     """Violation of the hard rows (the box is clipped afterwards: only gross box errors count)."""
     v = 0.0
     if problem.hard.m:
-        v = float(np.max(np.abs(problem.hard.violation(x))))
-    gross = max(float(np.max(problem.lower - x, initial=0.0)),
-                float(np.max(x - problem.upper, initial=0.0)))
-    return max(v, gross)
+        v = float(np.abs(problem.hard.violation(x)).max())
+    return max(v, float((problem.lower - x).max()), float((x - problem.upper).max()))
