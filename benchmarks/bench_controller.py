@@ -64,8 +64,18 @@ def stats(samples):
     return float(np.median(us)), float(np.percentile(us, 99))
 
 
-def run_ours(model, q0, traj, steps, solver):
-    stack = Stack(
+def small_stack(traj):
+    """The content of the Pink problem: tool position + posture in one level, same limits."""
+    return Stack(
+        levels=[Level(EndEffectorTask(trajectory=traj, gain=2.0),
+                      PostureTask(gain=0.1, weight=1e-3))],
+        constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds(),
+                     VehicleRateBounds(linear=0.5, angular=0.3)],
+    )
+
+
+def run_ours(model, q0, traj, steps, solver, stack=None):
+    stack = stack or Stack(
         levels=[
             Level(EndEffectorTask(trajectory=traj, gain=2.0)),                       # [1/s]
             Level(ManipulabilityTask(mode="floor", minimum=0.002, gain=2.0),
@@ -134,6 +144,7 @@ def main() -> None:
 
     ours, statuses, err_ours, ctrl = run_ours(model, q0, traj, args.steps, args.solver)
     pink_times, err_pink, _ = run_pink(model, q0, traj, args.steps, args.pink_solver)
+    small, _, err_small, _ = run_ours(model, q0, traj, args.steps, args.solver, small_stack(traj))
     o_med, o_p99 = stats(ours[10:])
     p_med, p_p99 = stats(pink_times[10:])
     # split of our step: rows + bounds + solve (no state update)
@@ -143,6 +154,12 @@ def main() -> None:
         start = time.perf_counter()
         ctrl._solver.solve_problem(ctrl._new_problem())
         solve_only.append(time.perf_counter() - start)
+    backend_only = []
+    for _ in range(500):
+        problem = ctrl._new_problem()
+        start = time.perf_counter()
+        ctrl._solver._backend.solve(problem)
+        backend_only.append(time.perf_counter() - start)
     fill_only = []
     for _ in range(500):
         start = time.perf_counter()
@@ -159,10 +176,15 @@ def main() -> None:
           f"3 bound sets): median {o_med:7.1f} us  p99 {o_p99:7.1f} us  statuses {statuses}  "
           f"final tool error {err_ours:.2e} m")
     print(f"  of which: state {stats(state_only)[0]:.1f} us, rows+bounds "
-          f"{stats(fill_only)[0]:.1f} us, solve+evaluate {stats(solve_only)[0]:.1f} us")
+          f"{stats(fill_only)[0]:.1f} us, solve+evaluate {stats(solve_only)[0]:.1f} us "
+          f"(back-end call alone {stats(backend_only)[0]:.1f} us)")
     print(f"pink ({args.pink_solver}, FrameTask + PostureTask, 1 weighted level, limits): "
           f"median {p_med:7.1f} us  p99 {p_p99:7.1f} us  final tool error {err_pink:.2e} m")
-    print(f"ratio ours/pink (median): {o_med / p_med:.2f}")
+    s_med, s_p99 = stats(small[10:])
+    print(f"uvms-qp, Pink's content (tool position + posture, 1 level, same limits): "
+          f"median {s_med:7.1f} us  p99 {s_p99:7.1f} us  final tool error {err_small:.2e} m")
+    print(f"ratio ours/pink (median): 4-level stack {o_med / p_med:.2f}, "
+          f"same content {s_med / p_med:.2f}")
 
 
 if __name__ == "__main__":

@@ -346,6 +346,7 @@ class Controller:
         self._stacked = (Block(self._A, self._lo, self._hi, self._w, self._row_is_equality,
                                self._task_names_flat())
                          if self.scheme == "hqp" and len(blocks) > 1 else None)
+        self._offsets = np.asarray([a for a, _ in self._level_ranges], dtype=np.intp)
         return self._new_problem()
 
     def _new_problem(self) -> Problem:
@@ -361,6 +362,8 @@ class Controller:
         if self._stacked is not None and isinstance(
                 getattr(Problem, "stacked", None), cached_property):
             problem.__dict__["stacked"] = self._stacked
+            if isinstance(getattr(Problem, "offsets", None), cached_property):
+                problem.__dict__["offsets"] = self._offsets  # structural: rows per level
         return problem
 
     def _task_names_flat(self) -> tuple[str, ...]:
