@@ -220,3 +220,17 @@ def test_blend_must_name_a_shaping_task(rov):
     with pytest.raises(InputError, match="mode 'shaping'"):
         Stack(levels=[Level(StationKeepingTask(blend="m"),
                             ManipulabilityTask(mode="ascend", name="m"))]).bind(rov)
+
+
+def test_controller_follows_per_tick_row_weights(rov):
+    """Row weights that change every tick (joint-limit damping, Eq. (17)) reach the solver."""
+    from uvms_qp.tasks import JointLimitTask
+
+    damping = JointLimitTask(mode="damping")
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0.6, 0.1, -0.1])), Level(damping)])
+    ctrl = Controller(rov, stack, dt=0.05)
+    for joints in ([0.1, 1.9, 3.3, 3.1], [3.0, 0.2, 1.0, 6.0]):
+        state = rov.state(rov.configuration(np.zeros(6), joints))
+        ctrl.step(state)
+        np.testing.assert_allclose(ctrl._w[3:], damping.row_weights)
+        np.testing.assert_allclose(ctrl.level_rows(state)[1].weights, damping.row_weights)

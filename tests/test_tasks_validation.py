@@ -202,3 +202,18 @@ def test_stack_bind_error_carries_location(rov):
                           Level(PostureTask(), EndEffectorTask("gripper", name="g"))])
     with pytest.raises(UnknownFrameError, match=r"levels\[1\]\.tasks\[1\] \(g\).*gripper"):
         stack.bind(rov)
+
+
+def test_joint_limit_damping_weights_follow_eq17(rov):
+    """Row weights 1 + |dH/dq_i| (the inverse of Eq. (17)'s w_i), refreshed every evaluation."""
+    from uvms_qp.tasks import joint_limit_index
+
+    task = JointLimitTask(mode="damping", strength=[10.0, 6.0, 10.0, 10.0], weight=2.0).bind(rov)
+    joints = np.array([0.1, 1.9, 3.3, 3.1])  # axis_e and axis_c near a limit
+    state = rov.state(rov.configuration(np.zeros(6), joints))
+    rows = task.rows(state)
+    _, grad = joint_limit_index(joints, rov.joint_lower, rov.joint_upper,
+                                np.array([10.0, 6.0, 10.0, 10.0]))
+    np.testing.assert_allclose(rows.weights, 2.0 * (1.0 + np.abs(grad)))
+    np.testing.assert_allclose(rows.lower, 0.0)
+    assert rows.weights[0] > 10 * rows.weights[1]  # near-limit joint is the expensive one

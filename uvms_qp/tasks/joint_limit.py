@@ -51,6 +51,10 @@ class JointLimitTask(Task):
       [rad/s]), the gradient-projection use of the index ``H`` of
       ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see :func:`joint_limit_index`); with
       ``normalize=True`` the gradient is divided by its norm (Eq. (11)).
+    * ``"damping"``: rows ``qdot_S = 0`` whose per-row weights are
+      ``weight (1 + |dH/dq_i|)``, the inverse of Eq. (17)'s ``w_i = 1 / (1 + |dH/dq_i|)``: in
+      its level, joints close to a limit become expensive to move (Eq. (17) as a task; the
+      weights are recomputed every tick).
     * ``"margin"``: inequality rows
       ``gain (q_min + margin - q) <= qdot <= gain (q_max - margin - q)`` [rad/s]: the joints are
       steered to stay ``margin`` [rad] inside their limits (a soft, prioritised version of the
@@ -59,7 +63,7 @@ class JointLimitTask(Task):
     Joints without finite limits are skipped.
 
     Args:
-        mode: ``"gradient"`` or ``"margin"``.
+        mode: ``"gradient"``, ``"margin"`` or ``"damping"``.
         joints: Joint names (default: all arm joints with finite limits).
         gain: ``lambda`` [rad^2/s] (gradient) or the margin gain [1/s].
         strength: ``C_i`` of Eq. (15), a number or one per selected joint (default 1).
@@ -76,7 +80,7 @@ class JointLimitTask(Task):
     def __init__(
         self,
         *,
-        mode: Literal["gradient", "margin"] = "margin",
+        mode: Literal["gradient", "margin", "damping"] = "margin",
         joints: list[str] | None = None,
         gain: float = 1.0,
         strength: float | list[float] = 1.0,
@@ -86,8 +90,9 @@ class JointLimitTask(Task):
         name: str | None = None,
     ) -> None:
         super().__init__(name=name, weight=weight)
-        if mode not in ("gradient", "margin"):
-            raise InputError(f"{self.name}.mode: expected 'gradient' or 'margin', got {mode!r}")
+        if mode not in ("gradient", "margin", "damping"):
+            raise InputError(f"{self.name}.mode: expected 'gradient', 'margin' or 'damping', got "
+                             f"{mode!r}")
         if not isinstance(normalize, bool):
             raise InputError(f"{self.name}.normalize: expected true or false")
         self.mode = mode
@@ -161,6 +166,11 @@ class JointLimitTask(Task):
         H, g = self.compute_value(state)
         self.value = H
         self._last_error = np.array([H])
+        if self.mode == "damping":
+            lower[:] = 0.0
+            upper[:] = 0.0
+            self._row_weights = self.weight * (1.0 + np.abs(g))  # a new array: refreshed
+            return
         scale = -self.gain
         if self.normalize:
             norm = float(np.sqrt(g @ g))
