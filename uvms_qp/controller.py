@@ -487,7 +487,7 @@ class Controller:
             lower=self._lower.copy(), upper=self._upper.copy(), saturated=saturated,
             level_names=self.level_names, _task_names=self._task_names,
             _rate_units=self._rate_units, _error_units=self._error_units, _residual_sq=sq,
-            _errors=tuple(t._last_error for t in self._tasks), _hard_rows_violation=hard_v,
+            _errors=tuple(task._last_error for task in self._tasks), _hard_rows_violation=hard_v,
             _level_sizes=self._level_sizes)
 
     def _raise_non_finite(self) -> None:
