@@ -21,7 +21,7 @@ MUST_PASS = ("daqp", "cascade:quadprog", "cascade:proxqp", "cascade:piqp")
 SLOW = {"cascade:clarabel", "cascade:highs", "cascade:osqp"}
 #: promises not kept yet, with the measured counts on these 1000 problems (see docs/solver.md)
 KNOWN_SHORTFALLS = {
-    "cascade:proxqp": "36/1000 failures, all truthful backend_error (thin feasible sets reported "
+    "cascade:proxqp": "14/1000 failures, all truthful backend_error (thin feasible sets reported "
                       "primal infeasible)",
     "cascade:piqp": "3/1000 failures, 2 of them inaccurate answers with an ok status",
     "cascade:osqp": "ADMM accuracy: about 10 % of answers off by more than 1e-6",
