@@ -117,7 +117,7 @@ class CascadeBackend:
         none = np.zeros((0, rows.n))
         G, h = rows.arrays()
         if G is None and lb is None and ub is None:
-            return np.linalg.lstsq(P, -q, rcond=None)[0], none
+            return np.asarray(np.linalg.lstsq(P, -q, rcond=None)[0], dtype=np.float64), none
         Gs, Ps = G, P
         if self.spec.sparse:
             from scipy import sparse
@@ -255,7 +255,7 @@ class CascadeBackend:
             base = level.A[ineq] @ xp
             rows.add(Ci, level.lo[ineq] - base, level.hi[ineq] - base)
         scale = max(1.0, float(np.abs(np.diag(P)).max()))
-        attempts = [(self.reg, self.prox_steps, None)]
+        attempts: list[tuple[float, int, Any]] = [(self.reg, self.prox_steps, None)]
         attempts += [(self.reg, self.prox_steps, extra) for extra in self.spec.retries]
         attempts.append((max(self.reg * 100.0, 1e-8), 3, None))
         for rel, steps, extra in attempts:
