@@ -17,10 +17,9 @@ from .result import HierarchyResult, Status
 
 def hard_violation(problem: Problem, x: FloatArray) -> float:
     """Largest violation of the hard box and hard rows at ``x`` (0 when feasible)."""
-    v = max(float(np.max(problem.lower - x, initial=0.0)),
-            float(np.max(x - problem.upper, initial=0.0)))
+    v = max(0.0, float((problem.lower - x).max()), float((x - problem.upper).max()))
     if problem.hard.m:
-        v = max(v, float(np.max(np.abs(problem.hard.violation(x)))))
+        v = max(v, float(np.abs(problem.hard.violation(x)).max()))
     return v
 
 
@@ -93,18 +92,17 @@ def evaluate(
             message = (message + "; " if message else "") + "back-end returned no finite x"
         x = safe_x(problem, x)
     stacked = problem.stacked
-    if stacked.m:
+    offsets = problem.offsets
+    if stacked.m and all(b.m for b in problem.levels):
         y = stacked.A @ x
         s_all = y - np.minimum(np.maximum(y, stacked.lo), stacked.hi)
-        sq = np.add.reduceat(stacked.w * s_all * s_all, problem.offsets) if len(
-            problem.levels) == len(problem.offsets) and all(b.m for b in problem.levels) else (
-            np.array([b.w @ (v * v) for b, v in zip(
-                problem.levels, np.split(s_all, problem.offsets[1:]), strict=True)]))
-        slacks = np.split(s_all, problem.offsets[1:])
-        res = np.sqrt(sq)
+        res = np.sqrt(np.add.reduceat(stacked.w * s_all * s_all, offsets))
+        ends = [*offsets[1:].tolist(), stacked.m]
+        slacks = [s_all[i:j] for i, j in zip(offsets.tolist(), ends, strict=True)]
     else:
-        slacks = [np.zeros(0) for _ in problem.levels]
-        res = np.zeros(len(problem.levels))
+        slacks = [block.violation(x) for block in problem.levels]
+        res = np.array([np.sqrt(b.w @ (v * v)) for b, v in zip(problem.levels, slacks,
+                                                                strict=True)])
     residuals = res.tolist()
     hv = hard_violation(problem, x)
     infeasible_level = None

@@ -123,14 +123,21 @@ class Problem:
     @cached_property
     def level_scales(self) -> np.ndarray:
         """``max(1, max |finite side|)`` of each level (for relative tolerances)."""
-        return np.array([b.scale() for b in self.levels])
+        st = self.stacked
+        if not st.m or not all(b.m for b in self.levels):
+            return np.array([b.scale() for b in self.levels])
+        lo = np.where(np.isfinite(st.lo), np.abs(st.lo), 0.0)
+        hi = np.where(np.isfinite(st.hi), np.abs(st.hi), 0.0)
+        return np.maximum(np.maximum.reduceat(np.maximum(lo, hi), self.offsets), 1.0)
 
     @cached_property
     def hard_scale(self) -> float:
         """``max(1, max |finite bound or hard side|)``."""
-        sides = np.concatenate((self.lower, self.upper, self.hard.lo, self.hard.hi))
-        finite = sides[np.isfinite(sides)]
-        return float(max(1.0, np.abs(finite).max())) if finite.size else 1.0
+        v = 1.0
+        for side in (self.lower, self.upper, self.hard.lo, self.hard.hi):
+            if side.size:
+                v = max(v, float(np.where(np.isfinite(side), np.abs(side), 0.0).max()))
+        return v
 
     @cached_property
     def active_tol(self) -> tuple[np.ndarray, np.ndarray]:
@@ -139,10 +146,40 @@ class Problem:
                 1e-9 * (1.0 + np.abs(np.where(np.isfinite(self.upper), self.upper, 0.0))))
 
 
+def _fast_rows(item: tuple[Any, ...] | list[Any]) -> Rows | None:
+    """Cheap acceptance test for a well-formed tuple; None sends it to the full validation.
+
+    Only checks that pass for valid input run here (dtype, shapes, finiteness, ordering); any
+    doubt falls back to :meth:`Rows.validated`, which produces the detailed error message.
+    """
+    try:
+        A = np.asarray(item[0], dtype=np.float64)
+        lo = np.asarray(item[1], dtype=np.float64)
+        hi = lo if len(item) == 2 else np.asarray(item[2], dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    if A.ndim != 2 or lo.ndim != 1 or hi.ndim != 1:
+        return None
+    m = A.shape[0]
+    if lo.shape[0] != m or hi.shape[0] != m or not np.isfinite(A).all():
+        return None
+    if len(item) == 2:
+        if not np.isfinite(lo).all():
+            return None
+    elif np.isnan(lo).any() or np.isnan(hi).any() or (lo > hi).any() or (lo == np.inf).any() or (
+            hi == -np.inf).any():
+        return None
+    return Rows(A, lo, hi)
+
+
 def _as_rows(item: Any, label: str) -> Rows:
     """Turn one level item (Rows, (A, b) or (A, lo, hi)) into validated ``Rows``."""
     if isinstance(item, Rows):
         return item
+    if isinstance(item, tuple | list) and len(item) in (2, 3):
+        fast = _fast_rows(item)
+        if fast is not None:
+            return fast
     if isinstance(item, tuple | list) and len(item) == 2:
         return Rows.equality(item[0], item[1], name=label)
     if isinstance(item, tuple | list) and len(item) == 3:

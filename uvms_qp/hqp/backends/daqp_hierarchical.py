@@ -59,6 +59,9 @@ class DaqpHierarchicalBackend:
         self.spec = spec
         self.settings = {**spec.settings, **(options or {})}
         self._daqp_settings = {k: v for k, v in self.settings.items() if k != "rho_ladder"}
+        first = float(self.settings.get("rho_soft", 1e-8))
+        self._ladder = (first, [first] + [float(r) for r in self.settings.get("rho_ladder", ())
+                                          if r != first])
         self._model: Any = None
         self._key: tuple[object, ...] | None = None
         self._H: np.ndarray | None = None
@@ -134,8 +137,7 @@ class DaqpHierarchicalBackend:
         stop on a point that breaks hard rows. The retries walk the ladder ``rho_ladder``
         (registry data) from a cold start; the value that worked is reported in ``info``.
         """
-        first = float(self.settings.get("rho_soft", 1e-8))
-        ladder = [first] + [r for r in self.settings.get("rho_ladder", ()) if r != first]
+        first, ladder = self._ladder
         tol = max(self.spec.hard_tol * hard_scale(problem), 1e-7)
         for i, rho in enumerate(ladder):
             if i:
