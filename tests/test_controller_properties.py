@@ -98,7 +98,7 @@ def check_draw(model, seed, solver):
 
 @pytest.mark.parametrize("solver", SOLVERS)
 @pytest.mark.parametrize("name", list(MODELS))
-@settings(max_examples=10)
+@settings(max_examples=25)
 @given(seed=st.integers(0, 2**31 - 1))
 def test_random_stacks_finite_bounded_and_prioritised(name, solver, seed):
     check_draw(MODELS[name], seed, solver)
