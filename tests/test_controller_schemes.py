@@ -234,3 +234,20 @@ def test_controller_follows_per_tick_row_weights(rov):
         ctrl.step(state)
         np.testing.assert_allclose(ctrl._w[3:], damping.row_weights)
         np.testing.assert_allclose(ctrl.level_rows(state)[1].weights, damping.row_weights)
+
+
+def test_non_finite_rows_name_the_task(rov):
+    from uvms_qp.errors import NonFiniteError
+
+    class Broken(PostureTask):
+        type_name = "broken"
+
+        def compute_error(self, state, t):
+            e = super().compute_error(state, t)
+            e[1] = np.nan
+            return e
+
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0.5, 0.0, 0.0])),
+                          Level(Broken(name="bad"))])
+    with pytest.raises(NonFiniteError, match="'bad'"):
+        Controller(rov, stack).step(rov.state(rov.home()))

@@ -449,7 +449,9 @@ class Controller:
         if self._row_slots:
             np.equal(self._Hlo, self._Hhi, out=self._hard_eq)
         A, lo, hi = self._A, self._lo, self._hi
-        if not (math.isfinite(A.sum()) and not np.isnan(lo).any() and not np.isnan(hi).any()):
+        # lower sides hold finite values and -inf only, upper sides finite and +inf only, so
+        # their sums are NaN exactly when a NaN is present
+        if not math.isfinite(A.sum()) or math.isnan(lo.sum()) or math.isnan(hi.sum()):
             self._raise_non_finite()
         np.equal(lo, hi, out=self._row_is_equality)
         problem = self._new_problem()
