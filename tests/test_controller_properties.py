@@ -35,7 +35,7 @@ from uvms_qp.tasks import (
 
 MODELS = {name: load_model(name) for name in
           ("bluerov2_heavy_alpha5", "wang_9dof", "soylu_planar")}
-SOLVERS = ["daqp", "cascade:quadprog", "cascade:clarabel"]
+SOLVERS = ["daqp", "cascade:quadprog", "cascade:piqp"]
 
 
 def random_problem(model, rng):
