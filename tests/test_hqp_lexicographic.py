@@ -21,9 +21,8 @@ MUST_PASS = ("daqp", "cascade:quadprog", "cascade:proxqp", "cascade:piqp")
 SLOW = {"cascade:clarabel", "cascade:highs", "cascade:osqp"}
 #: promises not kept yet, with the measured counts on these 1000 problems (see docs/solver.md)
 KNOWN_SHORTFALLS = {
-    "cascade:proxqp": "14/1000 failures, all truthful backend_error (thin feasible sets reported "
-                      "primal infeasible)",
-    "cascade:piqp": "3/1000 failures, 2 of them inaccurate answers with an ok status",
+    "cascade:proxqp": "1/1000 failures, a truthful backend_error (ProxQP reports a thin feasible "
+                      "set as primal infeasible)",
     "cascade:osqp": "ADMM accuracy: about 10 % of answers off by more than 1e-6",
 }
 

@@ -31,8 +31,8 @@ def hard_scale(problem: Problem) -> float:
 def polish_hard(problem: Problem, x: FloatArray) -> FloatArray:
     """Remove round-off outside the hard set by alternating projections.
 
-    Clip to the box, then take a least-norm step onto the violated hard rows, repeated (at most
-    50 times) until every hard violation is below 1e-12 relative. Back-ends leave violations of
+    Clip to the box, then take a least-norm step onto the violated hard rows with the variables
+    that are off their bounds, repeated (at most 50 times) until every hard violation is below 1e-12 relative. Back-ends leave violations of
     about 1e-9 (interior-point tolerances, DAQP's soft-row regularisation); the steps are of that
     size, far below the level tolerances.
     """
@@ -46,8 +46,13 @@ def polish_hard(problem: Problem, x: FloatArray) -> FloatArray:
         bad = np.abs(s) > tol
         if not bad.any():
             break
-        x = x - np.linalg.lstsq(hard.A[bad], s[bad], rcond=None)[0]
-        x = np.minimum(np.maximum(x, problem.lower), problem.upper)
+        # move only variables off their bounds, so that clipping does not undo the step
+        free = (x > problem.lower) & (x < problem.upper)
+        if not free.any():
+            free[:] = True
+        step = np.zeros_like(x)
+        step[free] = np.linalg.lstsq(hard.A[bad][:, free], s[bad], rcond=None)[0]
+        x = np.minimum(np.maximum(x - step, problem.lower), problem.upper)
     return x
 
 

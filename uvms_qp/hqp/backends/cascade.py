@@ -131,7 +131,9 @@ class CascadeBackend:
         except Exception:  # a back-end crash is a failed level, reported truthfully
             return None, none
         z = sol.x
-        if not sol.found or z is None or not np.all(np.isfinite(z)):
+        if z is None or not np.all(np.isfinite(z)):
+            return None, none
+        if not sol.found and not _closest_feasible_is_optimal(sol, G, h, z):
             return None, none
         z = np.asarray(z, dtype=np.float64)
         if not self.spec.exact:
@@ -141,16 +143,23 @@ class CascadeBackend:
                     z = zp
                     break
         active = [none]
-        if G is not None and sol.z is not None:
+        # strongly active: positive multiplier AND tight at z (an interior-point method gives
+        # inactive constraints small positive multipliers; those must not be frozen)
+        mult_tol = self.mult_tol if self.spec.exact else max(self.mult_tol, 1e-5)
+        if G is not None and h is not None and sol.z is not None:
             lam = np.asarray(sol.z, dtype=np.float64)
-            thr = self.mult_tol * max(1.0, float(np.abs(lam).max(initial=0.0)))
+            thr = mult_tol * max(1.0, float(np.abs(lam).max(initial=0.0)))
             X = rows.xrows()
-            strong = (lam > thr) & (np.abs(X).max(axis=1, initial=0.0) > 0.0)
+            tight = h - G @ z <= 1e-8 * (1.0 + np.abs(h))
+            strong = (lam > thr) & tight & (np.abs(X).max(axis=1, initial=0.0) > 0.0)
             active.append(X[strong])
-        if lb is not None and sol.z_box is not None:
+        if lb is not None and ub is not None and sol.z_box is not None:
+            zb = z[: rows.n]
             lam_b = np.abs(np.asarray(sol.z_box, dtype=np.float64))[: rows.n]
-            thr = self.mult_tol * max(1.0, float(lam_b.max(initial=0.0)))
-            active.append(np.eye(rows.n)[lam_b > thr])
+            thr = mult_tol * max(1.0, float(lam_b.max(initial=0.0)))
+            tight = (zb - lb[: rows.n] <= 1e-8 * (1.0 + np.abs(np.nan_to_num(lb[: rows.n])))) | (
+                ub[: rows.n] - zb <= 1e-8 * (1.0 + np.abs(np.nan_to_num(ub[: rows.n]))))
+            active.append(np.eye(rows.n)[(lam_b > thr) & tight])
         return z, np.vstack(active)
 
     def _constraints(self, problem: Problem, xp: FloatArray, Z: FloatArray, width: int,
@@ -346,3 +355,20 @@ def _polish_active_set(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Fl
     f = 0.5 * z @ P @ z + q @ z
     fp = 0.5 * zp @ P @ zp + q @ zp
     return zp if fp <= f + 1e-12 * (1.0 + abs(f)) else z
+
+
+def _closest_feasible_is_optimal(sol: Any, G: FloatArray | None, h: FloatArray | None,
+                                 z: FloatArray) -> bool:
+    """Accept ProxQP's "closest primal feasible" answer when it is in fact feasible.
+
+    With ``primal_infeasibility_solving`` ProxQP solves the QP over the closest feasible
+    constraint set; qpsolvers reports that as not found. When the constraints hold at ``z`` (to
+    1e-9 relative) that set is the original one, so ``z`` is the QP's optimum.
+    """
+    info = (sol.extras or {}).get("info")
+    status = str(getattr(info, "status", ""))
+    if "CLOSEST_PRIMAL_FEASIBLE" not in status:
+        return False
+    if G is None or h is None:
+        return True
+    return bool(np.all(G @ z - h <= 1e-9 * (1.0 + np.abs(h))))
