@@ -32,9 +32,9 @@ def polish_hard(problem: Problem, x: FloatArray) -> FloatArray:
     """Remove round-off outside the hard set by alternating projections.
 
     Clip to the box, then take a least-norm step onto the violated hard rows with the variables
-    that are off their bounds, repeated (at most 50 times) until every hard violation is below 1e-12 relative. Back-ends leave violations of
-    about 1e-9 (interior-point tolerances, DAQP's soft-row regularisation); the steps are of that
-    size, far below the level tolerances.
+    that are off their bounds, repeated (at most 50 times) until every hard violation is below
+    1e-12 relative. Back-ends leave violations of about 1e-9 (interior-point tolerances, DAQP's
+    soft-row regularisation); the steps are of that size, far below the level tolerances.
     """
     x = np.minimum(np.maximum(x, problem.lower), problem.upper)
     hard = problem.hard
