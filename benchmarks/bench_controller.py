@@ -74,7 +74,8 @@ def small_stack(traj):
     )
 
 
-def run_ours(model, q0, traj, steps, solver, stack=None):
+def ours_stepper(model, q0, traj, solver, stack=None):
+    """One-tick closure for our controller (state update + step), integrating its own q."""
     stack = stack or Stack(
         levels=[
             Level(EndEffectorTask(trajectory=traj, gain=2.0)),                       # [1/s]
@@ -88,47 +89,55 @@ def run_ours(model, q0, traj, steps, solver, stack=None):
                      VehicleRateBounds(linear=0.5, angular=0.3)],
     )
     ctrl = Controller(model, stack, solver=solver, dt=DT)
-    q = q0.copy()
-    times, statuses = [], {}
-    for k in range(steps):
-        t = k * DT
+    box = {"q": q0.copy(), "statuses": {}}
+
+    def tick(k):
         start = time.perf_counter()
-        state = model.state(q)
-        result = ctrl.step(state, t)
-        times.append(time.perf_counter() - start)
-        statuses[result.status.value] = statuses.get(result.status.value, 0) + 1
-        q = model.integrate(q, result.zeta, DT)
-    err = np.linalg.norm(model.frame_pose(q, "tool")[:3, 3] - traj.sample(steps * DT).position)
-    return times, statuses, err, ctrl
+        result = ctrl.step(model.state(box["q"]), k * DT)
+        elapsed = time.perf_counter() - start
+        box["statuses"][result.status.value] = box["statuses"].get(result.status.value, 0) + 1
+        box["q"] = model.integrate(box["q"], result.zeta, DT)
+        return elapsed
+
+    def error(t):
+        return float(np.linalg.norm(model.frame_pose(box["q"], "tool")[:3, 3]
+                                    - traj.sample(t).position))
+
+    return tick, error, box, ctrl
 
 
-def run_pink(model, q0, traj, steps, solver):
+def pink_stepper(model, q0, traj, solver):
+    """One-tick closure for Pink: Configuration (kinematics) + solve_ik, same limits."""
     import pink
+    import pinocchio as pin
     from pink.limits import ConfigurationLimit, VelocityLimit
     from pink.tasks import FrameTask
     from pink.tasks import PostureTask as PinkPosture
 
     pm = model.pin_model
     data = pm.createData()
-    frame = pink.tasks.FrameTask("tool", position_cost=1.0, orientation_cost=0.0, gain=0.1)
+    frame = FrameTask("tool", position_cost=1.0, orientation_cost=0.0, gain=1.0)
     posture = PinkPosture(cost=1e-3)
     posture.set_target(q0)
     vlim = np.minimum(np.r_[np.full(3, 0.5), np.full(3, 0.3), model.joint_rate_limit], 1e3)
     limits = [ConfigurationLimit(pm, config_limit_gain=0.5), VelocityLimit(pm, vlim)]
     tasks = [frame, posture]
-    q = q0.copy()
-    times = []
-    import pinocchio as pin
-    for k in range(steps):
-        t = k * DT
+    box = {"q": q0.copy()}
+
+    def tick(k):
         start = time.perf_counter()
-        conf = pink.Configuration(pm, data, q, copy_data=False)
-        frame.set_target(pin.SE3(np.eye(3), traj.sample(t).position))
+        conf = pink.Configuration(pm, data, box["q"], copy_data=False)
+        frame.set_target(pin.SE3(np.eye(3), traj.sample(k * DT).position))
         v = pink.solve_ik(conf, tasks, DT, solver=solver, limits=limits, safety_break=False)
-        times.append(time.perf_counter() - start)
-        q = pin.integrate(pm, q, v * DT)
-    err = np.linalg.norm(model.frame_pose(q, "tool")[:3, 3] - traj.sample(steps * DT).position)
-    return times, err, FrameTask
+        elapsed = time.perf_counter() - start
+        box["q"] = pin.integrate(pm, box["q"], v * DT)
+        return elapsed
+
+    def error(t):
+        return float(np.linalg.norm(model.frame_pose(box["q"], "tool")[:3, 3]
+                                    - traj.sample(t).position))
+
+    return tick, error
 
 
 def main() -> None:
@@ -141,48 +150,47 @@ def main() -> None:
     model = load_model("bluerov2_heavy_alpha5")
     q0 = model.home()
     traj = Circle(model.frame_pose(q0, "tool")[:3, 3])
-
-    ours, statuses, err_ours, ctrl = run_ours(model, q0, traj, args.steps, args.solver)
-    pink_times, err_pink, _ = run_pink(model, q0, traj, args.steps, args.pink_solver)
-    small, _, err_small, _ = run_ours(model, q0, traj, args.steps, args.solver, small_stack(traj))
-    o_med, o_p99 = stats(ours[10:])
-    p_med, p_p99 = stats(pink_times[10:])
-    # split of our step: rows + bounds + solve (no state update)
+    ours, ours_err, ours_box, ctrl = ours_stepper(model, q0, traj, args.solver)
+    small, small_err, _, _ = ours_stepper(model, q0, traj, args.solver, small_stack(traj))
+    pink, pink_err = pink_stepper(model, q0, traj, args.pink_solver)
+    # interleaved: the three loops see the same machine load
+    t_ours, t_small, t_pink = [], [], []
+    for k in range(args.steps):
+        t_ours.append(ours(k))
+        t_small.append(small(k))
+        t_pink.append(pink(k))
+    t_end = args.steps * DT
+    o_med, o_p99 = stats(t_ours[10:])
+    s_med, s_p99 = stats(t_small[10:])
+    p_med, p_p99 = stats(t_pink[10:])
+    # split of our step at a fixed state: state update, rows + bounds, solver
     state = model.state(q0)
-    solve_only = []
-    for _ in range(500):
-        start = time.perf_counter()
-        ctrl._solver.solve_problem(ctrl._new_problem())
-        solve_only.append(time.perf_counter() - start)
-    backend_only = []
-    for _ in range(500):
-        problem = ctrl._new_problem()
-        start = time.perf_counter()
-        ctrl._solver._backend.solve(problem)
-        backend_only.append(time.perf_counter() - start)
-    fill_only = []
-    for _ in range(500):
-        start = time.perf_counter()
-        ctrl._fill(state, 0.0)
-        ctrl._fill_box(state)
-        fill_only.append(time.perf_counter() - start)
-    state_only = []
+    parts = {"state": [], "rows+bounds": [], "solve+evaluate": [], "back-end call": []}
     for _ in range(500):
         start = time.perf_counter()
         model.state(q0)
-        state_only.append(time.perf_counter() - start)
-    print(f"model {model.name}, nv {model.nv}, {args.steps} steps, dt {DT} s")
+        parts["state"].append(time.perf_counter() - start)
+        start = time.perf_counter()
+        ctrl._fill(state, 0.0)
+        ctrl._fill_box(state)
+        parts["rows+bounds"].append(time.perf_counter() - start)
+        start = time.perf_counter()
+        ctrl._solver.solve_problem(ctrl._new_problem())
+        parts["solve+evaluate"].append(time.perf_counter() - start)
+        problem = ctrl._new_problem()
+        start = time.perf_counter()
+        ctrl._solver._backend.solve(problem)
+        parts["back-end call"].append(time.perf_counter() - start)
+    print(f"model {model.name}, nv {model.nv}, {args.steps} interleaved steps, dt {DT} s")
     print(f"uvms-qp ({args.solver}, 4 levels, {sum(t.dim for t in ctrl.tasks)} task rows, "
-          f"3 bound sets): median {o_med:7.1f} us  p99 {o_p99:7.1f} us  statuses {statuses}  "
-          f"final tool error {err_ours:.2e} m")
-    print(f"  of which: state {stats(state_only)[0]:.1f} us, rows+bounds "
-          f"{stats(fill_only)[0]:.1f} us, solve+evaluate {stats(solve_only)[0]:.1f} us "
-          f"(back-end call alone {stats(backend_only)[0]:.1f} us)")
-    print(f"pink ({args.pink_solver}, FrameTask + PostureTask, 1 weighted level, limits): "
-          f"median {p_med:7.1f} us  p99 {p_p99:7.1f} us  final tool error {err_pink:.2e} m")
-    s_med, s_p99 = stats(small[10:])
+          f"3 bound sets): median {o_med:7.1f} us  p99 {o_p99:7.1f} us  "
+          f"statuses {ours_box['statuses']}  final tool error {ours_err(t_end):.2e} m")
+    print("  split at a fixed state (medians): " + ", ".join(
+        f"{k} {stats(v)[0]:.1f} us" for k, v in parts.items()))
     print(f"uvms-qp, Pink's content (tool position + posture, 1 level, same limits): "
-          f"median {s_med:7.1f} us  p99 {s_p99:7.1f} us  final tool error {err_small:.2e} m")
+          f"median {s_med:7.1f} us  p99 {s_p99:7.1f} us  final tool error {small_err(t_end):.2e} m")
+    print(f"pink ({args.pink_solver}, FrameTask + PostureTask, 1 weighted level, limits): "
+          f"median {p_med:7.1f} us  p99 {p_p99:7.1f} us  final tool error {pink_err(t_end):.2e} m")
     print(f"ratio ours/pink (median): 4-level stack {o_med / p_med:.2f}, "
           f"same content {s_med / p_med:.2f}")
 
