@@ -1,0 +1,94 @@
+"""A per-step deadline: wall time around back-end calls and the back-ends' own limits.
+
+Behaviour (also in ``docs/reliability.md``):
+
+1. The step's wall clock starts when the safe solver is called; :class:`Deadline` measures the
+   time left with :func:`time.perf_counter`.
+2. Each back-end receives a time or iteration limit derived from the budget
+   (:func:`backend_limits`): DAQP ``time_limit`` [s] (hierarchical mode and cascade), HiGHS,
+   OSQP and Clarabel ``time_limit`` [s], ProxQP and PIQP an iteration cap. A cascade passes the
+   limit to each of its QPs, so a cascade step can exceed the budget by the number of QPs it
+   solves; quadprog has no limit at all.
+3. A back-end call cannot be pre-empted (it runs native code synchronously). When it returns
+   after the deadline, its answer is still verified and, if verified, used (it is safe, and the
+   freshest command available); the step is marked ``deadline_missed``.
+4. Once the deadline has passed, the fallback ladder skips every remaining solver stage (cold
+   retry, alternate back-end, relaxed levels) and goes straight to the cheap stages (decayed
+   previous command, zero), so a miss costs at most one more back-end call's worth of time.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+from .._validation import as_scalar
+
+
+class Deadline:
+    """Wall-clock budget of one control step.
+
+    Args:
+        budget: Time allowed for the solver stages [s]; ``inf`` (or None) for no deadline.
+        start: ``time.perf_counter()`` value the budget counts from (default: now).
+
+    Raises:
+        InputError: a non-positive or NaN budget.
+    """
+
+    __slots__ = ("budget", "end", "start")
+
+    def __init__(self, budget: float | None, start: float | None = None) -> None:
+        self.budget = math.inf if budget is None else as_scalar(
+            budget, "deadline", positive=True, allow_inf=True)
+        self.start = time.perf_counter() if start is None else float(start)
+        self.end = self.start + self.budget
+
+    def remaining(self) -> float:
+        """Time left before the deadline [s] (negative once passed)."""
+        return self.end - time.perf_counter()
+
+    def expired(self) -> bool:
+        """True once the deadline has passed."""
+        return time.perf_counter() > self.end
+
+    def elapsed(self) -> float:
+        """Time since the start [s]."""
+        return time.perf_counter() - self.start
+
+
+#: Solver name -> options that cap its run time, as a function of the budget [s].
+_TIME_LIMITS: dict[str, str] = {
+    "daqp": "time_limit",
+    "cascade:daqp": "time_limit",
+    "cascade:highs": "time_limit",
+    "cascade:osqp": "time_limit",
+    "cascade:clarabel": "time_limit",
+}
+_ITERATION_LIMITS: dict[str, tuple[str, int]] = {
+    "cascade:proxqp": ("max_iter", 10_000),
+    "cascade:piqp": ("max_iter", 250),
+}
+
+
+def backend_limits(solver: str, budget: float | None) -> dict[str, Any]:
+    """Back-end options that cap the time of one back-end call.
+
+    Args:
+        solver: Solver name (``"daqp"``, ``"cascade:<name>"``, ...).
+        budget: Step budget [s], or None / ``inf`` for no limit.
+
+    Returns:
+        Options for :class:`~uvms_qp.hqp.HierarchySolver` (empty when there is nothing to set).
+    """
+    if budget is None or not math.isfinite(budget):
+        return {}
+    out: dict[str, Any] = {}
+    key = _TIME_LIMITS.get(solver)
+    if key is not None:
+        out[key] = float(budget)
+    it = _ITERATION_LIMITS.get(solver)
+    if it is not None:
+        out[it[0]] = it[1]
+    return out
