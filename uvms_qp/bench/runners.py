@@ -54,6 +54,8 @@ PRIORITY_RATIO = 1e4
 WEIGHTED_BACKEND = "cascade:daqp"
 
 OK_STATUSES = ("optimal", "level_infeasible")
+#: Note of a null-space answer clipped into the box (then not a lexicographic reference).
+SATURATED = "saturated into the hard box"
 
 
 # ------------------------------------------------------------------------------- verification
@@ -191,6 +193,8 @@ class Runner:
         record.info.update({"model": scenario.model.name, "steps": result.steps,
                             "dt": scenario.dt})
         record.times_us = [t * 1e6 for t in timed.times]
+        if timed.backend:
+            record.backend_us = float(np.median(timed.backend))
         record.trials = result.steps
         record.nan_count = int(result.nan_steps)
         record.fail("nan", result.nan_steps)
@@ -220,17 +224,23 @@ class Runner:
         model, q = draw.model, draw.q
         controller.step(model.state(q), 0.0)  # warm-up (workspace, activation poses)
         result = None
+        backend: list[float] = []
         for _ in range(repetitions):
             start = time.perf_counter()
             state = model.state(q)
             result = controller.step(state, 0.0)
             record.times_us.append((time.perf_counter() - start) * 1e6)
+            _backend_time(result, backend)
             zeta = np.asarray(result.zeta, dtype=float)
             violation = (constraint_violation(draw.stack.constraints, state, draw.dt, zeta)
                          if np.all(np.isfinite(zeta)) else math.inf)
             _judge(record, zeta, str(result.status), violation,
                    getattr(getattr(result, "hierarchy", None), "message", "") or
                    getattr(result, "message", ""))
+        if backend:
+            record.backend_us = float(np.median(backend))
+        if getattr(result, "saturated", False):
+            record.note = SATURATED
         if result is not None and np.all(np.isfinite(result.zeta)):
             record.levels = level_norms(reference, np.asarray(result.zeta, dtype=float))
 
@@ -271,18 +281,29 @@ class _TimedStep:
         self.model = model
         self.solver_name = getattr(controller, "solver_name", None)
         self.times: list[float] = []
+        self.backend: list[float] = []
 
     def reset(self) -> None:
         reset = getattr(self.controller, "reset", None)
         if callable(reset):
             reset()
         self.times = []
+        self.backend = []
 
     def step(self, state: Any, t: float) -> Any:
         start = time.perf_counter()
         result = self.controller.step(self.model.state(state.q), t)
         self.times.append(time.perf_counter() - start)
+        _backend_time(result, self.backend)
         return result
+
+
+def _backend_time(result: Any, out: list[float]) -> None:
+    """Append the back-end's own solve time [us] of a step result, when it reports one."""
+    info = getattr(getattr(result, "hierarchy", None), "info", None)
+    value = info.get("daqp_solve_time") if info else None
+    if isinstance(value, float):
+        out.append(value * 1e6)
 
 
 def _box_violation(problem: BenchProblem, x: FloatArray) -> float:
@@ -476,6 +497,7 @@ class PinkRunner(Runner):
 
     def _uvms_controller(self, draw: Any) -> Any:
         spec = draw.pink
+        draw.stack.bind(draw.model)  # the rate bounds are read from the bound constraints
         state = draw.model.state(draw.q)
         lo, hi = rate_box(draw.stack.constraints, state, draw.dt, draw.model.nv)
         return PinkController(draw.model, draw.dt, position=spec["position"],
