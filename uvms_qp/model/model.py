@@ -155,6 +155,9 @@ class Model:
         self._columns = np.array(columns, dtype=np.intp)
         # None = zeta is Pinocchio's whole velocity (no column selection on the hot path)
         self._select: np.ndarray | None = None if len(columns) == n_pin else self._columns
+        # vehicle_pose_jacobian: actuated columns of the vehicle block (None: all of them)
+        act = list(vehicle.actuated_indices)
+        self._eta_columns: list[int] | None = None if act == list(range(vehicle.nv)) else act
 
         self.frames: tuple[str, ...] = STANDARD_FRAMES + tuple(
             f for f in arm_frames if f not in STANDARD_FRAMES

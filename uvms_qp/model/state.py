@@ -54,7 +54,7 @@ class State:
     (NED) axes or in the frame's own axes.
     """
 
-    __slots__ = ("_arm", "_eta", "_jacobians", "_poses", "model", "q")
+    __slots__ = ("_arm", "_eta", "_eta_jacobian", "_jacobians", "_poses", "model", "q")
 
     def __init__(self, model: Model, q: Any) -> None:
         """Validate ``q`` and compute the kinematics (see :meth:`Model.check_configuration`)."""
@@ -66,6 +66,7 @@ class State:
         self._jacobians: dict[tuple[str, str], FloatArray] = {}
         self._arm: dict[str, FloatArray] = {}
         self._eta: FloatArray | None = None
+        self._eta_jacobian: FloatArray | None = None
         pin.computeJointJacobians(model.pin_model, model._data, q)
         pin.updateFramePlacements(model.pin_model, model._data)
         model._owner = self
@@ -86,7 +87,7 @@ class State:
         """Vehicle pose ``[x, y, z, phi, theta, psi]`` / ``[x, y, psi]`` / ``[]`` [m, rad]."""
         if self._eta is None:
             m = self.model
-            eta = m.vehicle.eta_from_q(self.q[: m.nq_vehicle])
+            eta = np.array(m.vehicle.eta_values(self.q[: m.nq_vehicle]), dtype=np.float64)
             eta.setflags(write=False)
             self._eta = eta
         return self._eta
@@ -216,16 +217,23 @@ class State:
 
         Spatial: Fossen's transformation (``003_229789978cc4b235.txt``, Eq. (2)-(3)) restricted
         to the actuated columns; planar ``[R2(psi), 0; 0, 1]``; joint columns are zero.
+        Computed once per state in plain floats (the same numbers as
+        :meth:`~uvms_qp.model.vehicle.Vehicle.pose_jacobian`).
 
         Returns:
-            ``(model.eta_size, model.nv)`` array (a new array).
+            ``(model.eta_size, model.nv)`` read-only array.
         """
-        m = self.model
-        out = np.zeros((m.eta_size, m.nv))
-        if m.eta_size:
-            full = m.vehicle.pose_jacobian(self.eta)
-            out[:, : m.n_vehicle] = full[:, list(m.vehicle.actuated_indices)]
-        return out
+        J = self._eta_jacobian
+        if J is None:
+            m = self.model
+            J = np.zeros((m.eta_size, m.nv))
+            if m.eta_size:
+                full = m.vehicle.pose_jacobian(self.eta)
+                columns = m._eta_columns
+                J[:, : m.n_vehicle] = full if columns is None else full[:, columns]
+            J.setflags(write=False)
+            self._eta_jacobian = J
+        return J
 
     def __repr__(self) -> str:
         return f"<State of {self.model.name!r} q={np.array2string(self.q, precision=4)}>"

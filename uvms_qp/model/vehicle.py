@@ -48,6 +48,66 @@ ETA_NAMES: dict[str, tuple[str, ...]] = {
 _NQ = {"spatial": 7, "planar": 4, "fixed": 0}
 
 
+def quaternion_to_rotation(x: float, y: float, z: float, w: float) -> tuple[float, ...]:
+    """Rotation matrix of a unit quaternion, row-major as 9 floats.
+
+    The same floating-point operations as Eigen's ``Quaternion::toRotationMatrix`` (used by
+    Pinocchio), so the result is bit-identical to ``pin.Quaternion(w, x, y, z).toRotationMatrix()``
+    without the cost of building Pinocchio objects.
+    """
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    return (1.0 - (tyy + tzz), txy - twz, txz + twy,
+            txy + twz, 1.0 - (txx + tzz), tyz - twx,
+            txz - twy, tyz + twx, 1.0 - (txx + tyy))
+
+
+def rotation_to_rpy(R: Sequence[float]) -> tuple[float, float, float]:
+    """Z-Y-X Euler angles ``(roll, pitch, yaw)`` [rad] of a row-major rotation (9 floats).
+
+    ``R = Rz(yaw) Ry(pitch) Rx(roll)`` with pitch in ``[-pi/2, pi/2]``: the operations of
+    Pinocchio's ``rpy.matrixToRpy`` (Eigen's ``eulerAngles(2, 1, 0)`` folded into that range), in
+    plain floats; the tests check equality with Pinocchio.
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
+    yaw = math.atan2(r10, r00)
+    c2 = math.sqrt(r22 * r22 + r21 * r21)
+    if yaw < 0.0:
+        yaw += math.pi
+        pitch = math.atan2(-r20, -c2)
+    else:
+        pitch = math.atan2(-r20, c2)
+    s1, c1 = math.sin(yaw), math.cos(yaw)
+    roll = math.atan2(s1 * r02 - c1 * r12, c1 * r11 - s1 * r01)
+    if pitch < -0.5 * math.pi:
+        pitch += 2.0 * math.pi
+    if pitch > 0.5 * math.pi:
+        pitch = math.pi - pitch
+        roll = roll + math.pi if roll < 0.0 else roll - math.pi
+        yaw -= math.pi
+    return roll, pitch, yaw
+
+
+def rpy_to_rotation(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
+    """``Rz(yaw) Ry(pitch) Rx(roll)`` row-major as 9 floats.
+
+    The operations of Pinocchio's ``rpy.rpyToMatrix`` (a product of three axis-angle quaternions
+    turned into a matrix), in plain floats; the tests check equality with Pinocchio.
+    """
+    cz, sz = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    cy, sy = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    cx, sx = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    # q_z q_y, then (q_z q_y) q_x; each factor has a single non-zero vector component
+    aw, ax, ay, az = cz * cy, -(sz * sy), cz * sy, sz * cy
+    w = aw * cx - ax * sx
+    x = aw * sx + ax * cx
+    y = ay * cx + az * sx
+    z = az * cx - ay * sx
+    return quaternion_to_rotation(x, y, z, w)
+
+
 @dataclass(frozen=True)
 class Vehicle:
     """A vehicle kind with its actuated DOFs and optional rate limits.
@@ -145,12 +205,22 @@ class Vehicle:
 
     def eta_from_q(self, qv: FloatArray) -> FloatArray:
         """Vehicle pose ``eta`` from the vehicle configuration (angles in [rad])."""
+        return np.array(self.eta_values(qv))
+
+    def eta_values(self, qv: Any) -> list[float]:
+        """:meth:`eta_from_q` as a list of floats (no array; for the per-tick state update).
+
+        Spatial: the rotation of the unit quaternion and its Z-Y-X Euler angles, computed with
+        the same floating-point operations as Pinocchio (:func:`quaternion_to_rotation`,
+        :func:`rotation_to_rpy`).
+        """
         if self.kind == "spatial":
-            R = pin.Quaternion(qv[6], qv[3], qv[4], qv[5]).toRotationMatrix()
-            return np.concatenate((qv[:3], pin.rpy.matrixToRpy(R)))
+            x, y, z, qx, qy, qz, qw = qv.tolist() if isinstance(qv, np.ndarray) else qv
+            return [x, y, z, *rotation_to_rpy(quaternion_to_rotation(qx, qy, qz, qw))]
         if self.kind == "planar":
-            return np.array([qv[0], qv[1], math.atan2(qv[3], qv[2])])
-        return np.zeros(0)
+            x, y, c, s = qv.tolist() if isinstance(qv, np.ndarray) else qv
+            return [x, y, math.atan2(s, c)]
+        return []
 
     def pose_jacobian(self, eta: FloatArray) -> FloatArray:
         """Full kinematic transformation ``eta_dot = J(eta) @ v`` over all vehicle DOFs.
@@ -167,22 +237,31 @@ class Vehicle:
         Returns:
             ``(eta_size, nv_vehicle)`` matrix.
         """
+        return np.array(self.pose_jacobian_values(eta)).reshape(self.eta_size, self.nv)
+
+    def pose_jacobian_values(self, eta: Any) -> tuple[float, ...]:
+        """:meth:`pose_jacobian` as a flat row-major tuple of floats (for the state update).
+
+        The rotation block is built with the operations of Pinocchio's ``rpy.rpyToMatrix``
+        (:func:`rpy_to_rotation`), so the numbers equal those of a Pinocchio-built matrix.
+        """
         if self.kind == "spatial":
-            phi, theta, psi = eta[3], eta[4], eta[5]
-            J = np.zeros((6, 6))
-            J[:3, :3] = pin.rpy.rpyToMatrix(phi, theta, psi)
+            angles = eta[3:6]
+            phi, theta, psi = (angles.tolist() if isinstance(angles, np.ndarray)
+                               else (float(a) for a in angles))
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = rpy_to_rotation(phi, theta, psi)
             sphi, cphi = math.sin(phi), math.cos(phi)
             ctheta, ttheta = math.cos(theta), math.tan(theta)
-            J[3:, 3:] = (
-                (1.0, sphi * ttheta, cphi * ttheta),
-                (0.0, cphi, -sphi),
-                (0.0, sphi / ctheta, cphi / ctheta),
-            )
-            return J
+            return (r00, r01, r02, 0.0, 0.0, 0.0,
+                    r10, r11, r12, 0.0, 0.0, 0.0,
+                    r20, r21, r22, 0.0, 0.0, 0.0,
+                    0.0, 0.0, 0.0, 1.0, sphi * ttheta, cphi * ttheta,
+                    0.0, 0.0, 0.0, 0.0, cphi, -sphi,
+                    0.0, 0.0, 0.0, 0.0, sphi / ctheta, cphi / ctheta)
         if self.kind == "planar":
             c, s = math.cos(eta[2]), math.sin(eta[2])
-            return np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
-        return np.zeros((0, 0))
+            return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+        return ()
 
 
 def resolve_vehicle(value: Any) -> Vehicle:
