@@ -51,6 +51,7 @@ class JointPositionBounds(Constraint):
         self._cols = np.zeros(0, dtype=int)
         self._idx = np.zeros(0, dtype=int)
         self._lo = self._hi = np.zeros(0)
+        self._scratch = (np.zeros(0), np.zeros(0))
 
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")
@@ -64,6 +65,7 @@ class JointPositionBounds(Constraint):
         self._idx = compact_index(idx[finite])
         self._cols = compact_index(model.n_vehicle + idx[finite])
         self._lo, self._hi = lo[finite], hi[finite]
+        self._scratch = (np.empty(self._lo.size), np.empty(self._lo.size))
         return 0
 
     def joint_band(self, q: FloatArray, dt: float) -> tuple[FloatArray, FloatArray]:
@@ -78,9 +80,20 @@ class JointPositionBounds(Constraint):
         return lower, upper
 
     def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
-        """Intersect the joint-rate bounds into the box."""
+        """Intersect the joint-rate bounds into the box.
+
+        The operations of :meth:`joint_band`, in two scratch buffers owned by the constraint.
+        """
         cols = self._cols
-        lo, hi = self.joint_band(state.joints[self._idx], dt)
+        q = state.joints[self._idx]
+        k = self.gain / dt
+        lo, hi = self._scratch
+        np.subtract(self._lo, q, out=lo)
+        lo *= k
+        np.subtract(self._hi, q, out=hi)
+        hi *= k
+        np.minimum(lo, 0.0, out=lo)
+        np.maximum(hi, 0.0, out=hi)
         if isinstance(cols, slice):  # views: intersect in place
             np.maximum(lower[cols], lo, out=lower[cols])
             np.minimum(upper[cols], hi, out=upper[cols])

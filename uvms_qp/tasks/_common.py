@@ -136,20 +136,19 @@ def compact_index(indices: Any) -> Any:
 
 
 ANGLE_AXES = frozenset({"phi", "theta", "psi"})
-
-_LAST_POSE_JACOBIAN: list[Any] = [None, None]
+_TWO_PI = 2.0 * math.pi
 
 
 def vehicle_pose_jacobian(state: Any) -> FloatArray:
-    """``state.vehicle_pose_jacobian()``, computed once per state and shared by the tasks.
+    """``state.vehicle_pose_jacobian()`` (read-only, computed once per state by the state)."""
+    return state.vehicle_pose_jacobian()  # type: ignore[no-any-return]
 
-    Several tasks (station keeping, current alignment, attitude) read rows of the same matrix in
-    one tick; the last state's matrix is kept (compared by identity). Do not modify the result.
+
+def wrap_angles_in_place(e: FloatArray, positions: Sequence[int]) -> None:
+    """Wrap the entries ``e[i]``, ``i`` in ``positions``, to ``[-pi, pi)`` in place.
+
+    The same operations as :func:`wrap_angle`, per entry in plain floats (cheaper than masks
+    for the one to three angles of a vehicle pose).
     """
-    cache = _LAST_POSE_JACOBIAN
-    if cache[0] is state:
-        return cache[1]  # type: ignore[no-any-return]
-    J = state.vehicle_pose_jacobian()
-    cache[0] = state
-    cache[1] = J
-    return J  # type: ignore[no-any-return]
+    for i in positions:
+        e[i] = (e.item(i) + math.pi) % _TWO_PI - math.pi

@@ -84,6 +84,13 @@ class CurrentAlignmentTask(ErrorTask):
         """Yaw row of the vehicle-pose Jacobian (1, nv)."""
         return vehicle_pose_jacobian(state)[self._row: self._row + 1]
 
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write ``J_psi zeta = K wrap(psi_c + offset - psi)``."""
+        e = self.compute_error(state, t)
+        A[:] = state.vehicle_pose_jacobian()[self._row: self._row + 1]
+        self._set_sides(e, None, lower, upper)
+
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
         return (*super().updatable(), "heading", "direction", "offset")

@@ -174,7 +174,32 @@ class EndEffectorTask(ErrorTask):
         sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
         self._sel = compact_index(sel)
         self._sel_local = compact_index(sel - 3) if self.mode == "orientation" else self._sel
+        self._all_position = self.mode == "position" and len(axes) == 3
         return len(axes)
+
+    # ---------------------------------------------------------------------------------- hot path
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write ``J zeta = x_dot_d + K e`` (see the class docstring).
+
+        Position mode fuses :meth:`compute_error`, :meth:`compute_jacobian` and
+        :meth:`compute_feedforward` (the same operations, no 6-vectors); the other modes use
+        them as they are.
+        """
+        if self.mode != "position":
+            super().fill(state, t, A, lower, upper)
+            return
+        self._sample(t)
+        e = self._p_d - state.position(self.frame)  # type: ignore[operator]
+        J = state.jacobian(self.frame)
+        if self._all_position:
+            A[:] = J[:3]
+            self._set_sides(e, self._v_d, lower, upper)
+            return
+        sel = self._sel
+        A[:] = J[sel]
+        self._set_sides(e[sel], np.take(self._v_d, sel) if not isinstance(sel, slice)
+                        else np.asarray(self._v_d)[sel], lower, upper)
 
     # -------------------------------------------------------------------------------- evaluation
     def compute_error(self, state: State, t: float) -> FloatArray:

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import check_joint_list, joint_indices
+from ._common import check_joint_list, compact_index, joint_indices
 from .task import Task
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -107,7 +107,8 @@ class JointLimitTask(Task):
         else:
             self._strength_arg = as_scalar(strength, f"{self.name}.strength", positive=True)
         self._idx = np.zeros(0, dtype=int)
-        self._lo = self._hi = self._C = np.zeros(0)
+        self._jsel: Any = self._idx
+        self._lo = self._hi = self._C = self._lo_m = self._hi_m = np.zeros(0)
         self._A = np.zeros((0, 0))
         self.value = float("nan")
 
@@ -139,9 +140,16 @@ class JointLimitTask(Task):
             raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
                              f"limits of joint {model.joint_names[idx[j]]!r}")
         self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
+        self._jsel = compact_index(idx)
+        self._set_band()
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
         return int(idx.size)
+
+    def _set_band(self) -> None:
+        """The margin band ``[q_min + margin, q_max - margin]`` [rad] (mode ``'margin'``)."""
+        self._lo_m = self._lo + self.margin
+        self._hi_m = self._hi - self.margin
 
     @property
     def joint_indices(self) -> np.ndarray:
@@ -150,18 +158,19 @@ class JointLimitTask(Task):
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
         """``(H, grad H)`` on the regulated joints at ``state`` (Eq. (15)-(16))."""
-        return joint_limit_index(state.joints[self._idx], self._lo, self._hi, self._C)
+        return joint_limit_index(state.joints[self._jsel], self._lo, self._hi, self._C)
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
         """Write the gradient rows or the margin band (see the class docstring)."""
         A[:] = self._A
         if self.mode == "margin":
-            q = state.joints[self._idx]
-            np.multiply(self.gain, self._lo + self.margin - q, out=lower)
-            np.multiply(self.gain, self._hi - self.margin - q, out=upper)
-            dist = np.minimum(q - self._lo, self._hi - q)
-            self._last_error = np.array([float(dist.min())])
+            q = state.joints[self._jsel]
+            np.subtract(self._lo_m, q, out=lower)
+            lower *= self.gain
+            np.subtract(self._hi_m, q, out=upper)
+            upper *= self.gain
+            self._last_error = np.array([min((q - self._lo).min(), (self._hi - q).min())])
             return
         H, g = self.compute_value(state)
         self.value = H
@@ -191,5 +200,7 @@ class JointLimitTask(Task):
                 raise InputError(f"{self.name}.margin: {margin} rad leaves no room inside the "
                                  "limits")
             self.margin = margin
+            if self.model is not None:
+                self._set_band()
         else:
             super()._apply_update(key, value)

@@ -49,13 +49,17 @@ def _scaled_pinv_t(Js: FloatArray) -> tuple[float, FloatArray]:
     return w, np.asarray(w * (Js @ np.linalg.inv(G)), dtype=np.float64)
 
 
-def _position_pinv_cols(cols: list[list[float]]) -> tuple[float, list[Any]] | None:
-    """Fast path of :func:`_scaled_pinv_t` for the 3 position rows, in plain floats.
+def _position_gradient(cols: list[list[float]]) -> tuple[float, list[float]] | None:
+    """``(w, grad w)`` of the 3 position rows in plain floats (the fast path).
 
-    ``cols`` are the columns ``[v; w]`` of the twist Jacobian; returns ``(w, columns of
-    [w (J_p^+)^T; 0])`` or None when ``J_p J_p^T`` is (nearly) singular or n < 3.
+    ``cols`` are the columns ``[v; w]`` of the twist Jacobian. ``P = w (J_p^+)^T`` comes from the
+    adjugate of ``G = J_p J_p^T`` (``w G^{-1} = adj(G) / w``); with no angular rows in ``P``,
+    ``c_j = v_j x p_j`` and ``d_j = p_j x w_j``. One forward pass builds ``p_j``, ``c_j`` and the
+    prefix term ``v_i . sum_{j<i} d_j``, one backward pass the suffix term
+    ``w_i . sum_{j>=i} c_j``. Returns None when ``G`` is (nearly) singular or n < 3.
     """
-    if len(cols) < 3:
+    n = len(cols)
+    if n < 3:
         return None
     a = b = c = d = e = f = 0.0
     for v0, v1, v2, *_ in cols:
@@ -72,50 +76,32 @@ def _position_pinv_cols(cols: list[list[float]]) -> tuple[float, list[Any]] | No
         return None
     w = math.sqrt(det)
     s = 1.0 / w
-    out: list[Any] = [((A0 * v0 + A1 * v1 + A2 * v2) * s, (A1 * v0 + A4 * v1 + A5 * v2) * s,
-            (A2 * v0 + A5 * v1 + A8 * v2) * s, 0.0, 0.0, 0.0) for v0, v1, v2, *_ in cols]
-    return w, out
+    cs: list[tuple[float, float, float]] = []
+    grad: list[float] = []
+    t0 = t1 = t2 = 0.0
+    for v0, v1, v2, w0, w1, w2 in cols:
+        p0 = (A0 * v0 + A1 * v1 + A2 * v2) * s
+        p1 = (A1 * v0 + A4 * v1 + A5 * v2) * s
+        p2 = (A2 * v0 + A5 * v1 + A8 * v2) * s
+        cs.append((v1 * p2 - v2 * p1, v2 * p0 - v0 * p2, v0 * p1 - v1 * p0))
+        grad.append(v0 * t0 + v1 * t1 + v2 * t2)  # v_i . sum_{j<i} d_j
+        t0 += p1 * w2 - p2 * w1
+        t1 += p2 * w0 - p0 * w2
+        t2 += p0 * w1 - p1 * w0
+    s0 = s1 = s2 = 0.0
+    for i in range(n - 1, -1, -1):  # w_i . sum_{j>=i} c_j
+        c0, c1, c2 = cs[i]
+        s0 += c0
+        s1 += c1
+        s2 += c2
+        col = cols[i]
+        grad[i] = (col[3] * s0 + col[4] * s1 + col[5] * s2) + grad[i]
+    return w, grad
 
 
-def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float, FloatArray]:
-    r"""Yoshikawa's measure of a serial arm Jacobian and its exact gradient over the joints.
-
-    ``w = sqrt(det(J_S J_S^T))`` (``sqrt(det(J_S^T J_S))`` when ``J_S`` has more rows than columns),
-    ``000_7b5f597fe4e36aa4.txt, Eq. (18)``, with ``J_S`` the selected rows of the twist Jacobian
-    ``J6 = [V; W]`` (6, n) of the arm (columns in chain order, revolute or prismatic joints, any
-    fixed reference frame). Its gradient (Eq. (19)) is
-    ``dw/dq_i = w trace(dJ_S/dq_i J_S^+)``, evaluated with the exact column derivatives of a
-    serial-chain geometric Jacobian:
-
-        dJ_j/dq_i = [w_i x v_j; w_i x w_j]  (i <= j),     [w_j x v_i; 0]  (i > j),
-
-    which turn the trace into ``dw/dq_i = w (w_i . sum_{j>=i} c_j + v_i . sum_{j<i} d_j)`` with
-    ``c_j = v_j x P_v,j + w_j x P_w,j``, ``d_j = P_v,j x w_j`` and ``P = (J_S^+)^T`` padded to six
-    rows: O(n) work, no Hessian tensor. Units: ``w`` in the product of the row units (e.g. m^3
-    for 3 position rows); gradient in those units per rad.
-
-    Args:
-        J6: Twist Jacobian (6, n) of the frame, linear rows first.
-        rows: Indices of the rows of ``J6`` to use (default: the 3 linear rows).
-
-    Returns:
-        ``(w, grad)`` with ``grad`` of shape (n,).
-    """
-    n = J6.shape[1]
-    cols = J6.T.tolist()
-    if rows is None or (len(rows) == 3 and list(rows) == [0, 1, 2]):
-        position = _position_pinv_cols(cols)
-        if position is not None:
-            w, pcols = position
-        else:
-            w, wP = _scaled_pinv_t(J6[:3])
-            pcols = [(*p, 0.0, 0.0, 0.0) for p in wP.T.tolist()]
-    else:
-        w, wP = _scaled_pinv_t(J6[rows])
-        P6 = np.zeros((6, n))
-        P6[rows] = wP
-        pcols = P6.T.tolist()
-    # c_j = v_j x p_j + w_j x pw_j ;  d_j = p_j x w_j   (pure floats: n is small)
+def _general_gradient(cols: list[list[float]], pcols: list[list[float]]) -> list[float]:
+    """``grad w / w`` scaled by ``w`` from the columns of ``J6`` and of ``P6 = w (J_S^+)^T``."""
+    n = len(cols)
     c = []
     d = []
     for (v0, v1, v2, w0, w1, w2), (p0, p1, p2, r0, r1, r2) in zip(cols, pcols, strict=True):
@@ -140,7 +126,54 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
         t0 += di[0]
         t1 += di[1]
         t2 += di[2]
-    return w, np.array(grad)
+    return grad
+
+
+def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float, FloatArray]:
+    r"""Yoshikawa's measure of a serial arm Jacobian and its exact gradient over the joints.
+
+    ``w = sqrt(det(J_S J_S^T))`` (``sqrt(det(J_S^T J_S))`` when ``J_S`` has more rows than columns),
+    ``000_7b5f597fe4e36aa4.txt, Eq. (18)``, with ``J_S`` the selected rows of the twist Jacobian
+    ``J6 = [V; W]`` (6, n) of the arm (columns in chain order, revolute or prismatic joints, any
+    fixed reference frame). Its gradient (Eq. (19)) is
+    ``dw/dq_i = w trace(dJ_S/dq_i J_S^+)``, evaluated with the exact column derivatives of a
+    serial-chain geometric Jacobian:
+
+        dJ_j/dq_i = [w_i x v_j; w_i x w_j]  (i <= j),     [w_j x v_i; 0]  (i > j),
+
+    which turn the trace into ``dw/dq_i = w (w_i . sum_{j>=i} c_j + v_i . sum_{j<i} d_j)`` with
+    ``c_j = v_j x P_v,j + w_j x P_w,j``, ``d_j = P_v,j x w_j`` and ``P = (J_S^+)^T`` padded to six
+    rows: O(n) work, no Hessian tensor. Units: ``w`` in the product of the row units (e.g. m^3
+    for 3 position rows); gradient in those units per rad.
+
+    The sums run in plain floats: for the handful of joints of an arm this is cheaper than
+    array operations (a vectorised form with an outer product and triangular sums was measured
+    at about twice the time for 4 joints).
+
+    Args:
+        J6: Twist Jacobian (6, n) of the frame, linear rows first.
+        rows: Indices of the rows of ``J6`` to use (any sequence of ints or an index array;
+            default: the 3 linear rows).
+
+    Returns:
+        ``(w, grad)`` with ``grad`` of shape (n,).
+    """
+    n = J6.shape[1]
+    cols = J6.T.tolist()
+    if rows is None:
+        sel = [0, 1, 2]
+    elif isinstance(rows, np.ndarray):
+        sel = [int(r) for r in rows.reshape(-1).tolist()]
+    else:  # any sequence of ints (a tuple would index J6 as (row, column))
+        sel = [int(r) for r in rows]
+    if sel == [0, 1, 2]:
+        fast = _position_gradient(cols)
+        if fast is not None:
+            return fast[0], np.array(fast[1])
+    w, wP = _scaled_pinv_t(J6[sel])
+    P6 = np.zeros((6, n))
+    P6[sel] = wP
+    return w, np.array(_general_gradient(cols, P6.T.tolist()))
 
 
 def shaping_function(w: float, threshold: float) -> float:
@@ -231,6 +264,8 @@ class ManipulabilityTask(Task):
             raise InputError(f"{self.name}.threshold: required in mode 'shaping'")
         self.axes: list[str] = []
         self._sel = np.arange(3)
+        self._rows: list[int] | None = None
+        self._select = np.zeros((0, 0))
         self._nvh = 0
         self._prev: tuple[float, float] | None = None
         self._w_dot = 0.0
@@ -253,8 +288,12 @@ class ManipulabilityTask(Task):
             axes = ["x", "y"] if model.vehicle_kind == "planar" else ["x", "y", "z"]
         self.axes = list(axes)
         self._sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
+        self._rows = None if self._sel.tolist() == [0, 1, 2] else self._sel.tolist()
         self._nvh = model.n_vehicle
-        return 1 if self.mode == "floor" else model.n_joints
+        n = model.n_joints
+        self._select = np.zeros((n, model.nv))  # rows of ascend/shaping: qdot = ...
+        self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
+        return 1 if self.mode == "floor" else n
 
     def reset(self) -> None:
         """Forget the previous value used for ``w_dot``."""
@@ -270,8 +309,7 @@ class ManipulabilityTask(Task):
         cached = self._cache
         if cached[0] is state:
             return cached[1], cached[2]
-        w, g = manipulability_and_gradient(state.arm_jacobian(self.frame, rows="twist"),
-                                           self._sel)
+        w, g = manipulability_and_gradient(state.arm_jacobian(self.frame), self._rows)
         self._cache = (state, w, g)
         return w, g
 
@@ -285,15 +323,14 @@ class ManipulabilityTask(Task):
         w, g = self.compute_value(state)
         self.value = w
         self._last_error = np.array([w])
-        A[:] = 0.0
-        nvh = self._nvh
         if self.mode == "floor":
+            nvh = self._nvh
+            A[0, :nvh] = 0.0
             A[0, nvh:] = g
             lower[0] = self.gain * (self.minimum - w)  # type: ignore[operator]
             upper[0] = np.inf
             return
-        n = g.shape[0]
-        A[np.arange(n), nvh + np.arange(n)] = 1.0
+        A[:] = self._select
         scale = self.gain
         if self.mode == "shaping":
             if self._prev is not None and t > self._prev[0]:

@@ -77,6 +77,7 @@ class PayloadMomentTask(Task):
             raise InputError(f"{self.name}.maximum: required in mode 'bound'")
         self.normalize = normalize
         self._nvh = 0
+        self._select = np.zeros((0, 0))
         self.value = float("nan")
 
     @property
@@ -89,32 +90,49 @@ class PayloadMomentTask(Task):
         if model.n_joints == 0:
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
         self._nvh = model.n_vehicle
-        return 1 if self.mode == "bound" else model.n_joints
+        n = model.n_joints
+        self._select = np.zeros((n, model.nv))  # rows of the reduce mode: qdot = ...
+        self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
+        return 1 if self.mode == "bound" else n
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
         """``(M, grad M)`` at ``state`` (gradient over the arm joints)."""
-        T_wb = state.pose("arm_base")
-        x, y, _ = (T_wb[:3, :3].T @ (state.position(self.frame) - T_wb[:3, 3])).tolist()
-        Jp = state.arm_jacobian(self.frame, rows="position")
+        x, y = self._lever_arm(state)
+        Jp = state.arm_jacobian(self.frame)
         F = self.force
         grad = (2.0 * F * x) * Jp[0] + (2.0 * F * y) * Jp[1]
         return (x * x + y * y) * F, grad
 
+    def _lever_arm(self, state: State) -> tuple[float, float]:
+        """``(x_E, y_E)`` [m]: the frame's origin in arm-base coordinates."""
+        T_wb = state.pose("arm_base")
+        x, y, _ = (T_wb[:3, :3].T @ (state.position(self.frame) - T_wb[:3, 3])).tolist()
+        return x, y
+
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write the reduce rows or the bound row (see the class docstring)."""
-        M, g = self.compute_value(state)
+        """Write the reduce rows or the bound row (see the class docstring).
+
+        The gradient is written straight into the row buffer (the operations of
+        :meth:`compute_value`).
+        """
+        x, y = self._lever_arm(state)
+        Jp = state.arm_jacobian(self.frame)
+        F = self.force
+        M = (x * x + y * y) * F
         self.value = M
         self._last_error = np.array([M])
-        A[:] = 0.0
-        nvh = self._nvh
         if self.mode == "bound":
-            A[0, nvh:] = g
+            A[0, : self._nvh] = 0.0
+            g = A[0, self._nvh:]
+            np.multiply(2.0 * F * x, Jp[0], out=g)
+            g += (2.0 * F * y) * Jp[1]
             lower[0] = -np.inf
             upper[0] = self.gain * (self.maximum - M)  # type: ignore[operator]
             return
-        n = g.shape[0]
-        A[np.arange(n), nvh + np.arange(n)] = 1.0
+        A[:] = self._select
+        g = (2.0 * F * x) * Jp[0]
+        g += (2.0 * F * y) * Jp[1]
         scale = -self.gain
         if self.normalize:
             norm = float(np.sqrt(g @ g))

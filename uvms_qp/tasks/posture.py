@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ._common import check_joint_list, joint_indices
+from ._common import check_joint_list, compact_index, joint_indices
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -53,6 +53,7 @@ class PostureTask(ErrorTask):
         self.joints = check_joint_list(joints, f"{self.name}.joints")
         self._posture_arg = None if posture is None else as_vector(posture, f"{self.name}.posture")
         self._idx = np.zeros(0, dtype=int)
+        self._jsel: Any = self._idx
         self._q_ref: FloatArray | None = None
         self._A = np.zeros((0, 0))
 
@@ -69,6 +70,7 @@ class PostureTask(ErrorTask):
                 raise InputError(f"{self.name}: reference='middle' needs finite joint limits")
             self._posture_arg = 0.5 * (lo + hi)
         self._idx = idx
+        self._jsel = compact_index(idx)
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
         self._q_ref = None if self._posture_arg is None else self._posture_arg.copy()
@@ -80,7 +82,7 @@ class PostureTask(ErrorTask):
 
     def compute_error(self, state: State, t: float) -> FloatArray:
         """``q_ref - q`` on the selected joints [rad]."""
-        q = state.joints[self._idx]
+        q = state.joints[self._jsel]
         if self._q_ref is None:
             self._q_ref = q.copy()
         return self._q_ref - q

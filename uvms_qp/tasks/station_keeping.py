@@ -8,7 +8,14 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ._common import ANGLE_AXES, eta_axes, parse_axes, vehicle_pose_jacobian, wrap_angle
+from ._common import (
+    ANGLE_AXES,
+    compact_index,
+    eta_axes,
+    parse_axes,
+    vehicle_pose_jacobian,
+    wrap_angles_in_place,
+)
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -70,8 +77,9 @@ class StationKeepingTask(ErrorTask):
         self._blend_task: Any = None
         self._target_arg = None if target is None else as_vector(target, f"{self.name}.target")
         self.axes: list[str] = []
-        self._idx = np.zeros(0, dtype=int)
+        self._idx: Any = np.zeros(0, dtype=int)
         self._angle = np.zeros(0, dtype=bool)
+        self._angle_pos: list[int] = []
         self._target: FloatArray | None = None
 
     def _bind(self, model: Model) -> int:
@@ -94,8 +102,9 @@ class StationKeepingTask(ErrorTask):
             raise InputError(f"{self.name}.target: expected {len(axes)} values for axes "
                              f"{axes}, got {self._target_arg.shape[0]}")
         self.axes = list(axes)
-        self._idx = np.array([known.index(a) for a in axes], dtype=int)
+        self._idx = compact_index([known.index(a) for a in axes])
         self._angle = np.array([a in ANGLE_AXES for a in axes], dtype=bool)
+        self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
         self._target = None if self._target_arg is None else self._target_arg.copy()
         return len(axes)
 
@@ -132,11 +141,10 @@ class StationKeepingTask(ErrorTask):
         eta = state.eta[self._idx]
         if self._target is None:
             if self.hold == "current":
-                return np.zeros(self._idx.shape[0])
+                return np.zeros(len(self.axes))
             self._target = eta.copy()
         e = self._target - eta
-        if self._angle.any():
-            e[self._angle] = wrap_angle(e[self._angle])
+        wrap_angles_in_place(e, self._angle_pos)
         if self._blend_task is not None:
             e *= 1.0 - self._blend_task.shaping_factor(state)
         return e
@@ -144,6 +152,13 @@ class StationKeepingTask(ErrorTask):
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Rows of the vehicle-pose Jacobian ``J_eta`` for the selected coordinates."""
         return vehicle_pose_jacobian(state)[self._idx]
+
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write ``J_eta,S zeta = K (eta_d - eta)_S`` (no feed-forward)."""
+        e = self.compute_error(state, t)
+        A[:] = state.vehicle_pose_jacobian()[self._idx]
+        self._set_sides(e, None, lower, upper)
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -249,12 +249,23 @@ class ErrorTask(Task):
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write ``J zeta = x_dot_d + K e`` (equality rows)."""
+        """Write ``J zeta = x_dot_d + K e`` (equality rows).
+
+        Subclasses may override this with a fused version of the three ``compute_*`` calls
+        (same numbers, fewer temporaries); they finish with :meth:`_set_sides`.
+        """
         e = self.compute_error(state, t)
-        self._last_error = e
         A[:] = self.compute_jacobian(state, t)
+        self._set_sides(e, self.compute_feedforward(state, t), lower, upper)
+
+    def _set_sides(self, e: FloatArray, ff: Any, lower: FloatArray, upper: FloatArray) -> None:
+        """``lower = upper = K e + ff`` (``ff`` None for no feed-forward); keeps ``e``.
+
+        ``e`` must be a fresh array: it is kept as the task's last error (a step result refers
+        to it).
+        """
+        self._last_error = e
         np.multiply(self.gain, e, out=lower)
-        ff = self.compute_feedforward(state, t)
         if ff is not None:
             lower += ff
         upper[:] = lower

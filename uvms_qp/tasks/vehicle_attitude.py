@@ -8,7 +8,13 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
-from ._common import eta_axes, parse_axes, vehicle_pose_jacobian, wrap_angle
+from ._common import (
+    compact_index,
+    eta_axes,
+    parse_axes,
+    vehicle_pose_jacobian,
+    wrap_angles_in_place,
+)
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -54,7 +60,8 @@ class VehicleAttitudeTask(ErrorTask):
                                f"{self.name}.axes")
         self.roll = as_scalar(roll, f"{self.name}.roll")
         self.pitch = as_scalar(pitch, f"{self.name}.pitch")
-        self._idx = np.zeros(0, dtype=int)
+        self._idx: Any = np.zeros(0, dtype=int)
+        self._all: list[int] = []
         self._target = np.zeros(0)
 
     def _bind(self, model: Model) -> int:
@@ -67,17 +74,27 @@ class VehicleAttitudeTask(ErrorTask):
                 raise InputError(f"{self.name}: model {model.name!r} does not actuate "
                                  f"{_ACTUATOR[a]!r} (actuated: {', '.join(model.actuated)}), so "
                                  f"{a} cannot be a task")
-        self._idx = np.array([known.index(a) for a in self.axes], dtype=int)
+        self._idx = compact_index([known.index(a) for a in self.axes])
+        self._all = list(range(len(self.axes)))
         self._target = np.array([self.roll if a == "phi" else self.pitch for a in self.axes])
         return len(self.axes)
 
     def compute_error(self, state: State, t: float) -> FloatArray:
         """``wrap(angle_d - angle)`` on the selected axes [rad]."""
-        return np.asarray(wrap_angle(self._target - state.eta[self._idx]))
+        e = self._target - state.eta[self._idx]
+        wrap_angles_in_place(e, self._all)
+        return e
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Rows of the vehicle-pose Jacobian for roll/pitch."""
         return vehicle_pose_jacobian(state)[self._idx]
+
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
+             upper: FloatArray) -> None:
+        """Write ``J_eta,S zeta = K wrap(eta_d - eta)_S``."""
+        e = self.compute_error(state, t)
+        A[:] = state.vehicle_pose_jacobian()[self._idx]
+        self._set_sides(e, None, lower, upper)
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
