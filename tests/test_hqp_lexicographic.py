@@ -39,6 +39,12 @@ def unit_rows(rng, m, n):
 
 def random_mixed_problem(rng):
     """Box (often tight, some free variables), optional hard rows, 1-5 mixed levels."""
+    levels, lower, upper, hard = random_mixed_inputs(rng)
+    return normalize_problem(levels, lower, upper, None, hard)
+
+
+def random_mixed_inputs(rng):
+    """The user-facing inputs ``(levels, lower, upper, hard)`` of :func:`random_mixed_problem`."""
     n = int(rng.integers(3, 13))
     x0 = rng.uniform(-1.0, 1.0, n)  # a point that satisfies every hard constraint
     width = rng.uniform(0.05, 1.0, n)
@@ -74,7 +80,7 @@ def random_mixed_problem(rng):
                 c = 2.0 * rng.standard_normal(m - k)
                 level.append((A[k:], c - 0.3, c + 0.3))
             levels.append(level)
-    return normalize_problem(levels, lower, upper, None, hard)
+    return levels, lower, upper, hard
 
 
 @pytest.fixture(scope="module")

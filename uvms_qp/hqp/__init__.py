@@ -22,8 +22,13 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
+
+from .._validation import FloatArray, as_vector
+from ..errors import InputError
 from .backends import BackendOutput
-from .evaluate import evaluate
+from .evaluate import evaluate, evaluate_stacked
+from .loading import load_levels
 from .problem import Problem, normalize_problem
 from .registry import SOLVERS, SolverSpec, available_solvers, get_spec
 from .result import HierarchyResult, Status
@@ -43,11 +48,11 @@ __all__ = [
 ]
 
 
-def _make_backend(spec: SolverSpec, options: dict[str, Any] | None) -> Any:
+def _make_backend(spec: SolverSpec, options: dict[str, Any] | None, lean: bool) -> Any:
     if spec.kind == "daqp":
         from .backends.daqp_hierarchical import DaqpHierarchicalBackend
 
-        return DaqpHierarchicalBackend(spec, options)
+        return DaqpHierarchicalBackend(spec, options, lean=lean)
     if spec.kind == "cascade":
         from .backends.cascade import CascadeBackend
 
@@ -70,6 +75,10 @@ class HierarchySolver:
             level is met, default from the registry), ``hard_tol``; DAQP settings (``rho_soft``,
             ``primal_tol``...); cascade ``rank_tol``, ``reg`` and qpsolvers settings; nullspace
             ``rcond``.
+        lean: Use the fast path where the back-end has one (``"daqp"``: preallocated stacked
+            buffers, vectorised validation and evaluation, lazy diagnostics). False runs the
+            reference path (full normalisation, :func:`~uvms_qp.hqp.evaluate.evaluate`); both
+            give the same ``x``, status and residuals (tested).
 
     Raises:
         UnknownSolverError: unknown or uninstalled solver (lists installed ones, says what to
@@ -77,13 +86,38 @@ class HierarchySolver:
     """
 
     def __init__(self, solver: str = "daqp", weights: Any = None,
-                 options: dict[str, Any] | None = None) -> None:
+                 options: dict[str, Any] | None = None, *, lean: bool = True) -> None:
         self.spec = get_spec(solver)
         self.weights = weights
         opts = dict(options or {})
         self.level_tol = float(opts.pop("level_tol", self.spec.level_tol))
         self.hard_tol = float(opts.pop("hard_tol", self.spec.hard_tol))
-        self._backend = _make_backend(self.spec, opts)
+        self.lean = bool(lean)
+        self._backend = _make_backend(self.spec, opts, self.lean)
+        self._loads = self.lean and self.spec.kind == "daqp"
+
+    @property
+    def weights(self) -> Any:
+        """Diagonal of the metric W as given (None for the identity)."""
+        return self._weights
+
+    @weights.setter
+    def weights(self, value: Any) -> None:
+        self._weights = value
+        self._metric: FloatArray | None = None
+
+    def _metric_for(self, n: int) -> FloatArray:
+        """The validated metric for n variables (validated once, then reused)."""
+        W = self._metric
+        if W is None or W.shape[0] != n:
+            if self._weights is None:
+                W = np.ones(n)
+            else:
+                W = as_vector(self._weights, "weights", n)
+                if np.any(W <= 0.0):
+                    raise InputError(f"weights: expected a positive metric, got min {W.min():g}")
+            self._metric = W
+        return W
 
     @property
     def name(self) -> str:
@@ -108,15 +142,43 @@ class HierarchySolver:
             InputError: malformed input (shape, NaN/inf, lower > upper, inequality level given to
                 ``"nullspace"``), with a message naming the culprit.
         """
+        if self._loads:
+            loaded = load_levels(self._backend.workspace, levels, lower, upper, hard)
+            if loaded is not None:
+                ws, lo, hi, w = loaded
+                W = self._metric_for(ws.n)
+                memo: list[Problem] = []
+
+                def get_problem() -> Problem:
+                    if not memo:
+                        memo.append(normalize_problem(levels, lower, upper, W, hard))
+                    return memo[0]
+
+                start = time.perf_counter()
+                out = self._backend.solve_loaded(ws, lo, hi, w, W, get_problem)
+                return self._result(out, get_problem, time.perf_counter() - start)
         problem = normalize_problem(levels, lower, upper, self.weights, hard)
         return self.solve_problem(problem)
 
     def solve_problem(self, problem: Problem) -> HierarchyResult:
-        """Solve an already normalised :class:`Problem` (skips validation)."""
+        """Solve an already normalised :class:`Problem` (skips validation).
+
+        The fast entry for internal callers: the arrays of ``problem`` are trusted (float64,
+        consistent shapes, no NaN); finiteness of ``x`` and the hard rows are still verified.
+        A problem that carries its stacked level rows (``problem.__dict__["stacked"]``, e.g. a
+        view of a controller's row buffer) is loaded with one copy.
+        """
         start = time.perf_counter()
         out: BackendOutput = self._backend.solve(problem)
-        elapsed = time.perf_counter() - start
-        return evaluate(problem, out.x, self.spec.name, out.status, out.message,
+        return self._result(out, lambda: problem, time.perf_counter() - start)
+
+    def _result(self, out: BackendOutput, get_problem: Any, elapsed: float) -> HierarchyResult:
+        if out.measured is not None and out.x is not None and self.lean:
+            ws, s, lo, hi, w, hv = out.measured
+            return evaluate_stacked(ws, out.x, s, lo, hi, w, hv, self.spec.name, out.status,
+                                    out.message, level_tol=self.level_tol,
+                                    hard_tol=self.hard_tol, solve_time=elapsed, info=out.info)
+        return evaluate(get_problem(), out.x, self.spec.name, out.status, out.message,
                         level_tol=self.level_tol, hard_tol=self.hard_tol, solve_time=elapsed,
                         info=out.info)
 

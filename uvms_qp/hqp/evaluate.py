@@ -12,7 +12,8 @@ import numpy as np
 
 from .._validation import FloatArray
 from .problem import Problem
-from .result import HierarchyResult, Status
+from .result import HierarchyResult, StackedResult, Status
+from .workspace import Workspace, finite_abs_max
 
 
 def hard_violation(problem: Problem, x: FloatArray) -> float:
@@ -136,6 +137,72 @@ def evaluate(
         message=message,
         info=info or {},
     )
+
+
+def evaluate_stacked(
+    ws: Workspace,
+    x: FloatArray,
+    s: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    w: FloatArray,
+    hv: float,
+    solver: str,
+    status: Status,
+    message: str,
+    *,
+    level_tol: float,
+    hard_tol: float,
+    solve_time: float,
+    info: dict[str, object] | None = None,
+) -> HierarchyResult:
+    """:func:`evaluate` on the stacked layout of a :class:`~uvms_qp.hqp.workspace.Workspace`.
+
+    Same measurements and decisions as :func:`evaluate`, in a few array operations:
+    ``r = sqrt(G (w * s_L * s_L))`` for the level residuals, the largest ``|s|`` of the box and
+    hard rows for the hard violation; the scales ``max(1, max |finite side|)`` are computed only
+    when a value exceeds its bare tolerance (a scale is never below 1). Slacks and active-bound
+    masks are built on first access (:class:`~uvms_qp.hqp.result.StackedResult`).
+
+    Args:
+        ws: The workspace whose ``A`` holds the problem's rows.
+        x: The finite solution, shape (n,).
+        s: ``ws.slacks(x, lo, hi)``: signed slacks of box, hard rows and level rows, finite.
+        lo: Stacked lower sides ``[lower; lo_H; lo_1; ...]`` (fresh, kept by the result).
+        hi: Stacked upper sides.
+        w: Level row weights, shape (sum m_k,).
+        hv: Largest box/hard violation at ``x``
+            (:func:`~uvms_qp.hqp.workspace.box_and_hard_violation` of ``s``).
+        solver: Back-end name.
+        status: The back-end's verdict (OPTIMAL or LEVEL_INFEASIBLE: claims success).
+        message: Back-end detail.
+        level_tol: Relative tolerance deciding whether a level is met.
+        hard_tol: Relative tolerance on the hard box and rows.
+        solve_time: Wall time of the solve [s].
+        info: Back-end extras.
+    """
+    head = ws.head
+    sl = s[head:]
+    r = np.sqrt(ws.G.dot(w * sl * sl))
+    residuals = r.tolist()
+    infeasible_level = None
+    if status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
+        if hv > hard_tol and hv > hard_tol * finite_abs_max(lo[:head], hi[:head]):
+            status = Status.BACKEND_ERROR
+            message = (message + "; " if message else "") + f"hard rows violated by {hv:.2e}"
+        else:
+            status = Status.OPTIMAL
+            for k, value in enumerate(residuals):
+                if value > level_tol:
+                    a, b = head + ws.starts[k], head + ws.ends[k]
+                    if value > level_tol * finite_abs_max(lo[a:b], hi[a:b]):
+                        infeasible_level = k
+                        status = Status.LEVEL_INFEASIBLE
+                        break
+    n = ws.n
+    return StackedResult(x, status, solver, residuals, infeasible_level, hv, solve_time, message,
+                         info or {}, slacks=s, head=head, spans=ws.spans, lower=lo[:n],
+                         upper=hi[:n])
 
 
 def hard_feasible(problem: Problem) -> bool:

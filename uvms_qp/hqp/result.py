@@ -87,3 +87,86 @@ class HierarchyResult:
         if self.message:
             lines.append(f"  {self.message}")
         return "\n".join(lines)
+
+
+class StackedResult(HierarchyResult):
+    """A :class:`HierarchyResult` whose slacks and active-bound masks are built on first access.
+
+    The hot path measures every slack in one stacked vector (see :mod:`uvms_qp.hqp.workspace`);
+    ``level_slacks`` are views of it and ``active_lower``/``active_upper`` are computed from
+    fresh copies of the bounds only when read. Every attribute has the value and meaning it has
+    on :class:`HierarchyResult`; all of them can be assigned.
+    """
+
+    def __init__(
+        self,
+        x: FloatArray,
+        status: Status,
+        solver: str,
+        level_residuals: list[float],
+        infeasible_level: int | None,
+        hard_violation: float,
+        solve_time: float,
+        message: str,
+        info: dict[str, object],
+        *,
+        slacks: FloatArray,
+        head: int,
+        spans: tuple[tuple[int, int], ...],
+        lower: FloatArray,
+        upper: FloatArray,
+    ) -> None:
+        self.x = x
+        self.status = status
+        self.solver = solver
+        self.level_residuals = level_residuals
+        self.infeasible_level = infeasible_level
+        self.hard_violation = hard_violation
+        self.solve_time = solve_time
+        self.message = message
+        self.info = info
+        self._s = slacks
+        self._head = head
+        self._spans = spans
+        self._lower = lower
+        self._upper = upper
+        self._slacks: list[FloatArray] | None = None
+        self._active: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property  # type: ignore[override]
+    def level_slacks(self) -> list[FloatArray]:
+        """Signed slack per level, ``s = A x - clip(A x, lo, hi)`` (views of one array)."""
+        if self._slacks is None:
+            s, h = self._s, self._head
+            self._slacks = [s[h + a: h + b] for a, b in self._spans]
+        return self._slacks
+
+    @level_slacks.setter
+    def level_slacks(self, value: list[FloatArray]) -> None:
+        self._slacks = value
+
+    def _masks(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._active is None:
+            lo, hi, x = self._lower, self._upper, self.x
+            tol_lo = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(lo), lo, 0.0)))
+            tol_hi = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(hi), hi, 0.0)))
+            self._active = (x - lo <= tol_lo, hi - x <= tol_hi)
+        return self._active
+
+    @property  # type: ignore[override]
+    def active_lower(self) -> np.ndarray:
+        """Mask of variables at their lower bound (``x - lower <= 1e-9 (1 + |lower|)``)."""
+        return self._masks()[0]
+
+    @active_lower.setter
+    def active_lower(self, value: np.ndarray) -> None:
+        self._active = (value, self._masks()[1])
+
+    @property  # type: ignore[override]
+    def active_upper(self) -> np.ndarray:
+        """Mask of variables at their upper bound (``upper - x <= 1e-9 (1 + |upper|)``)."""
+        return self._masks()[1]
+
+    @active_upper.setter
+    def active_upper(self, value: np.ndarray) -> None:
+        self._active = (self._masks()[0], value)

@@ -15,10 +15,22 @@ to unit norm before softening it, so for a level that cannot be met it minimises
 scalings of that level do not change the compromise. Levels that can be met, and levels whose rows
 share one value of ``w_i |a_i|^2``, give the same answer as every other back-end. The soft-row
 regularisation ``rho_soft`` (1e-8 here, with a ladder of retries) leaves errors of 1e-9..1e-7.
+
+Hot path: the rows are copied into the preallocated buffers of a
+:class:`~uvms_qp.hqp.workspace.Workspace` (reused while ``n``, the hard rows, the level sizes,
+the hard equality pattern and ``W`` repeat), the ``daqp.Model`` is updated in place (warm start
+from the previous working set), and ``x`` is measured once on the stacked rows. The first answer
+is accepted when DAQP claims success and the box and hard rows hold to ``1e-7`` (the retry
+threshold is never below that); round-off outside the box is clipped exactly as
+:func:`~uvms_qp.hqp.evaluate.polish_hard` does. Anything else (a stall, a broken hard row, a
+failure, hard rows off by more than ``1e-12``) continues on the reference path with the
+normalised :class:`~uvms_qp.hqp.problem.Problem`, from the same model state.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -27,9 +39,17 @@ from ..evaluate import hard_feasible, hard_scale, polish_hard
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
+from ..workspace import DAQP_INF, Workspace, box_and_hard_violation
 from . import BackendOutput
 
-_INF = 1e30  # DAQP's infinity
+_INF = DAQP_INF  # DAQP's infinity
+
+#: a first answer whose box/hard violation is at most this is accepted without a retry (the
+#: retry threshold is ``max(hard_tol * hard_scale, 1e-7)``, never below it)
+_ACCEPT = 1e-7
+#: hard rows violated by at most this need no projection (polish_hard's 1e-12 relative tolerance
+#: is never below it)
+_POLISH = 1e-12
 
 _FLAGS = {
     -1: "infeasible hard constraints",
@@ -50,13 +70,18 @@ class DaqpHierarchicalBackend:
     Args:
         spec: Registry entry (settings such as ``rho_soft``).
         options: Overrides of DAQP settings (``rho_soft``, ``primal_tol``, ``iter_limit``...).
+        lean: Use the measured hot path (see the module docstring); False runs the reference
+            path only (stacking, verification and polish on the normalised problem), which gives
+            the same answers and is kept for tests and debugging.
     """
 
-    def __init__(self, spec: SolverSpec, options: dict[str, Any] | None = None) -> None:
+    def __init__(self, spec: SolverSpec, options: dict[str, Any] | None = None,
+                 lean: bool = True) -> None:
         import daqp
 
         self._daqp = daqp
         self.spec = spec
+        self.lean = lean
         self.settings = {**spec.settings, **(options or {})}
         self._daqp_settings = {k: v for k, v in self.settings.items() if k != "rho_ladder"}
         first = float(self.settings.get("rho_soft", 1e-8))
@@ -64,59 +89,75 @@ class DaqpHierarchicalBackend:
                                           if r != first])
         self._model: Any = None
         self._key: tuple[object, ...] | None = None
-        self._H: np.ndarray | None = None
-        self._f: np.ndarray | None = None
-        self._W: np.ndarray | None = None
+        self._ws: Workspace | None = None
+        self._levels_ref: object = None
+        self._sizes: tuple[int, ...] = ()
         self._sense = np.zeros(0, dtype=np.intc)
+        self._held: tuple[object, ...] = ()
 
-    def _arrays(self, problem: Problem) -> tuple[np.ndarray, ...]:
-        stacked = problem.stacked
-        hard = problem.hard
-        A = stacked.A if not hard.m else np.vstack((hard.A, stacked.A))
-        bu = np.concatenate((problem.upper, hard.hi, stacked.hi))
-        bl = np.concatenate((problem.lower, hard.lo, stacked.lo))
-        np.minimum(bu, _INF, out=bu)
-        np.maximum(bl, -_INF, out=bl)
-        return A, bu, bl
+    def reset(self) -> None:
+        """Forget the DAQP model (the next call sets it up afresh: a cold start)."""
+        self._key = None
 
-    def _structure(self, problem: Problem) -> tuple[np.ndarray, np.ndarray]:
-        n, hard = problem.n, problem.hard
-        sense = np.zeros(n + hard.m + problem.stacked.m, dtype=np.intc)
-        if hard.m:
-            sense[n : n + hard.m][hard.eq] = 5
-        sizes = np.array([n + hard.m] + [b.m for b in problem.levels])
-        bp = np.unique(np.cumsum(sizes)).astype(np.intc)
-        return sense, bp
+    # ---------------------------------------------------------------------------- workspace
+    def workspace(self, n: int, hard_rows: int, sizes: tuple[int, ...]) -> Workspace:
+        """The buffers of structure ``(n, hard_rows, sizes)`` (kept while it repeats)."""
+        ws = self._ws
+        if ws is None or ws.key != (n, hard_rows, sizes):
+            ws = self._ws = Workspace(n, hard_rows, sizes)
+        return ws
+
+    def _problem_workspace(self, problem: Problem) -> Workspace:
+        levels = problem.levels
+        if levels is not self._levels_ref:  # the same tuple of blocks has the same sizes
+            self._sizes = tuple(b.A.shape[0] for b in levels)
+            self._levels_ref = levels
+        return self.workspace(problem.n, problem.hard.A.shape[0], self._sizes)
 
     def solve(self, problem: Problem) -> BackendOutput:
         """Solve all levels in one DAQP call, then clip/project round-off into the hard set."""
-        A, bu, bl = self._arrays(problem)
-        hard = problem.hard
-        key = (problem.n, hard.m, tuple(b.m for b in problem.levels),
-               hard.eq.tobytes() if hard.m else b"")
-        W_same = self._W is not None and np.array_equal(problem.W, self._W)
-        if key != self._key or not W_same:
-            sense, bp = self._structure(problem)
-            self._sense = sense
-            self._W = problem.W.copy()
-            self._H = np.diag(problem.W)
-            self._f = np.zeros(problem.n)
-            self._model = self._daqp.Model()
-            flag = self._model.setup(self._H, self._f, A, bu, bl, sense, break_points=bp)[0]
+        ws = self._problem_workspace(problem)
+        lo, hi, w = ws.load_problem(problem)
+        return self.solve_loaded(ws, lo, hi, w, problem.W, lambda: problem)
+
+    def solve_loaded(self, ws: Workspace, lo: np.ndarray, hi: np.ndarray, w: np.ndarray,
+                     W: np.ndarray, get_problem: Callable[[], Problem]) -> BackendOutput:
+        """Solve the problem already loaded in ``ws`` (rows in ``ws.A``, sides ``lo``/``hi``).
+
+        Args:
+            ws: Workspace holding the rows (from :meth:`workspace`).
+            lo: Stacked lower sides ``[lower; lo_H; lo_1; ...]``.
+            hi: Stacked upper sides.
+            w: Level row weights.
+            W: Diagonal of the metric (validated), shape (n,).
+            get_problem: Returns the normalised problem; called only off the hot path.
+        """
+        n, head = ws.n, ws.head
+        hard_eq = (lo[n:head] == hi[n:head]).tobytes() if ws.mh else b""
+        key = (ws.key, hard_eq, W.tobytes())
+        if key != self._key:
+            flag = self._setup(ws, W, lo[n:head] == hi[n:head])
             if flag < 0:
                 self._key = None
                 return BackendOutput(None, Status.BACKEND_ERROR,
                                      f"DAQP setup failed (exit flag {flag})", {"exitflag": flag})
-            settings = self._model.settings
-            settings.update(self._daqp_settings)
-            self._model.settings = settings
             self._key = key
         else:
-            self._model.update(A=A, bupper=bu, blower=bl)
-        x, flag, info, rho = self._solve_with_retries(problem)
-        extra = {"exitflag": int(flag), "daqp_solve_time": info["solve_time"],
-                 "daqp_setup_time": info["setup_time"], "iterations": info["iterations"],
-                 "rho_soft": rho}
+            self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
+        if not self.lean:
+            problem = get_problem()
+            x, flag, info, rho = self._solve_with_retries(problem)
+        else:
+            x, _, flag, info = self._model.solve()
+            if flag in (1, 2):
+                fast = self._measure(ws, x, lo, hi, get_problem)
+                if fast is not None:
+                    x, s, hv = fast
+                    extra = self._extra(flag, info, self._ladder[0])
+                    return BackendOutput(x, Status.OPTIMAL, "", extra, (ws, s, lo, hi, w, hv))
+            problem = get_problem()
+            x, flag, info, rho = self._solve_with_retries(problem, (x, flag, info))
+        extra = self._extra(flag, info, rho)
         if flag in (1, 2):
             x = polish_hard(problem, x)
             return BackendOutput(x, Status.OPTIMAL, "", extra)
@@ -128,16 +169,79 @@ class DaqpHierarchicalBackend:
             reason = "the hard box and hard rows admit no point"
         return BackendOutput(x, status, f"DAQP exit flag {flag}: {reason}", extra)
 
+    @staticmethod
+    def _extra(flag: int, info: dict[str, Any], rho: float) -> dict[str, object]:
+        return {"exitflag": int(flag), "daqp_solve_time": info["solve_time"],
+                "daqp_setup_time": info["setup_time"], "iterations": info["iterations"],
+                "rho_soft": rho}
+
+    def _setup(self, ws: Workspace, W: np.ndarray, hard_eq: np.ndarray) -> int:
+        """Set a new ``daqp.Model`` up for the structure of ``ws`` (H = diag(W), f = 0)."""
+        n = ws.n
+        sense = np.zeros(ws.M, dtype=np.intc)  # simple bounds, hard rows, level rows
+        sense[n: ws.head][hard_eq] = 5
+        bp = np.unique(np.cumsum((ws.head, *ws.sizes))).astype(np.intc)
+        self._sense = sense
+        H, f = np.diag(W), np.zeros(n)
+        self._held = (H, f, bp, ws)  # arrays handed to DAQP stay alive with the model
+        self._model = self._daqp.Model()
+        flag = int(self._model.setup(H, f, ws.daqp_A, ws.bu, ws.bl, sense, break_points=bp)[0])
+        if flag >= 0:
+            settings = self._model.settings
+            settings.update(self._daqp_settings)
+            self._model.settings = settings
+        return flag
+
+    @staticmethod
+    def _measure(ws: Workspace, x: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                 get_problem: Callable[[], Problem]) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """Accept DAQP's first answer if the box and hard rows hold; polish it like the reference.
+
+        Returns ``(x, slacks at x, box/hard violation at x)``, or None to continue on the
+        reference path (non-finite values, or a box/hard violation above the acceptance
+        threshold).
+        """
+        if not math.isfinite(sum(x.tolist())):  # NaN/inf (or an overflow: reference path)
+            return None
+        n = ws.n
+        if not ws.mh:  # box only: check and clip before the one product with the rows
+            clipped = np.minimum(np.maximum(x, lo[:n]), hi[:n])
+            off = (x - clipped).tolist()
+            if max(max(off), -min(off)) > _ACCEPT:
+                return None
+            s = ws.slacks(clipped, lo, hi)
+            if not math.isfinite(sum(s.tolist())):
+                return None
+            return clipped, s, 0.0
+        s = ws.slacks(x, lo, hi)
+        values = s.tolist()
+        if not math.isfinite(sum(values)):
+            return None
+        head = ws.head
+        top = values[:head]
+        hv = max(max(top), -min(top), 0.0)
+        if hv > _ACCEPT:
+            return None
+        box = values[:n]
+        if max(box) > 0.0 or min(box) < 0.0:  # round-off outside the box: clip (exact)
+            x = np.minimum(np.maximum(x, lo[:n]), hi[:n])
+            s = ws.slacks(x, lo, hi)
+        if box_and_hard_violation(s[n:], ws.mh) > _POLISH:
+            x = polish_hard(get_problem(), x)
+            s = ws.slacks(x, lo, hi)
+        return x, s, box_and_hard_violation(s, head)
+
     def _solve_with_retries(
-        self, problem: Problem
+        self, problem: Problem, first: tuple[np.ndarray, int, dict[str, Any]] | None = None
     ) -> tuple[np.ndarray, int, dict[str, Any], float]:
         """Solve; if DAQP stalls (exit flag 3 or a violated hard row), retry with other rho_soft.
 
         A very small ``rho_soft`` makes the soft-row subproblems badly conditioned and DAQP can
         stop on a point that breaks hard rows. The retries walk the ladder ``rho_ladder``
         (registry data) from a cold start; the value that worked is reported in ``info``.
+        ``first`` is the answer of a solve already made with the first ``rho_soft``.
         """
-        first, ladder = self._ladder
+        first_rho, ladder = self._ladder
         tol = max(self.spec.hard_tol * hard_scale(problem), 1e-7)
         for i, rho in enumerate(ladder):
             if i:
@@ -145,16 +249,19 @@ class DaqpHierarchicalBackend:
                 settings["rho_soft"] = rho
                 self._model.settings = settings
                 self._model.update(sense=self._sense.copy())  # cold start for the retry
-            x, _, flag, info = self._model.solve()
+            if i == 0 and first is not None:
+                x, flag, info = first
+            else:
+                x, _, flag, info = self._model.solve()
             if flag == -1:
                 break
             if flag in (1, 2) and _box_rows_violation(problem, x) <= tol:
                 break
             if flag in (1, 2):
                 flag = 3  # claimed success but a hard row is broken: not acceptable
-        if len(ladder) > 1 and rho != first:
+        if len(ladder) > 1 and rho != first_rho:
             settings = self._model.settings
-            settings["rho_soft"] = first
+            settings["rho_soft"] = first_rho
             self._model.settings = settings
         return x, int(flag), info, rho
 
