@@ -7,7 +7,7 @@ PostureTask in one weighted level, its ConfigurationLimit and VelocityLimit, thr
 Both follow the same moving target (a circle around the start tool position) and integrate
 their own zeta, so warm-start conditions are realistic. Prints medians, p99 and the ratio.
 
-    python benchmarks/bench_controller.py [--steps 2000] [--solver daqp]
+    python benchmarks/bench_controller.py [--steps 2000] [--solver daqp] [--breakdown 2000]
 """
 
 from __future__ import annotations
@@ -145,6 +145,8 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=2000)
     parser.add_argument("--solver", default="daqp", help="our back-end (default daqp)")
     parser.add_argument("--pink-solver", default="daqp", help="qpsolvers name used by Pink")
+    parser.add_argument("--breakdown", type=int, default=2000, metavar="N",
+                        help="ticks of the per-task breakdown with fresh states (0: skip)")
     args = parser.parse_args()
 
     model = load_model("bluerov2_heavy_alpha5")
@@ -193,6 +195,58 @@ def main() -> None:
           f"median {p_med:7.1f} us  p99 {p_p99:7.1f} us  final tool error {pink_err(t_end):.2e} m")
     print(f"ratio ours/pink (median): 4-level stack {o_med / p_med:.2f}, "
           f"same content {s_med / p_med:.2f}")
+    if args.breakdown:
+        print_breakdown(model, ctrl, q0, args.breakdown)
+
+
+def print_breakdown(model, ctrl, q0, reps):
+    """Per-tick cost of the rows and bounds with a fresh state every tick (no warm caches).
+
+    Each task is timed alone as ``model.state(q) + task.fill`` minus ``model.state(q)``, so it
+    includes the kinematic getters it triggers (shared getters count in every task using them;
+    the sum exceeds the whole). Configurations cycle through a random set.
+    """
+    rng = np.random.default_rng(0)
+    qs = [model.random_configuration(rng) for _ in range(32)]
+    slots = list(ctrl._slots)
+    dt = ctrl.dt
+    box_cons = list(ctrl._dynamic_box)
+    lower, upper = np.empty(model.nv), np.empty(model.nv)
+    samples = {"state": [], "state+rows+bounds": []}
+    samples.update({f"task {t.name} ({type(t).__name__})": [] for t, *_ in slots})
+    samples.update({f"box {c.name}": [] for c in box_cons})
+    clock = time.perf_counter
+    for r in range(reps):
+        q = qs[r % len(qs)]
+        start = clock()
+        model.state(q)
+        samples["state"].append(clock() - start)
+        start = clock()
+        state = model.state(q)
+        ctrl._fill(state, 0.0)
+        ctrl._fill_box(state)
+        samples["state+rows+bounds"].append(clock() - start)
+        for task, A, lo, hi in slots:
+            start = clock()
+            state = model.state(q)
+            task.fill(state, 0.0, A, lo, hi)
+            samples[f"task {task.name} ({type(task).__name__})"].append(clock() - start)
+        for c in box_cons:
+            lower.fill(-np.inf)
+            upper.fill(np.inf)
+            start = clock()
+            state = model.state(q)
+            c.fill_box(state, dt, lower, upper)
+            samples[f"box {c.name}"].append(clock() - start)
+        start = clock()
+        model.state(q).vehicle_pose_jacobian()
+        samples.setdefault("state+vehicle_pose_jacobian", []).append(clock() - start)
+    base = stats(samples["state"])[0]
+    print(f"breakdown, fresh state every tick ({reps} ticks, medians; rows below 'state' exclude "
+          f"the state update of {base:.1f} us)")
+    for label, values in samples.items():
+        med = stats(values)[0]
+        print(f"  {label:<48}{med if label == 'state' else med - base:8.1f} us")
 
 
 if __name__ == "__main__":

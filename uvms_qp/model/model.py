@@ -158,6 +158,9 @@ class Model:
         # vehicle_pose_jacobian: actuated columns of the vehicle block (None: all of them)
         act = list(vehicle.actuated_indices)
         self._eta_columns: list[int] | None = None if act == list(range(vehicle.nv)) else act
+        # flat positions of the (eta_size, nv_vehicle) block inside the (eta_size, nv) matrix
+        self._eta_block = np.array([r * self.nv + c for r in range(vehicle.eta_size)
+                                    for c in range(vehicle.nv)], dtype=np.intp)
 
         self.frames: tuple[str, ...] = STANDARD_FRAMES + tuple(
             f for f in arm_frames if f not in STANDARD_FRAMES

@@ -228,9 +228,11 @@ class State:
             m = self.model
             J = np.zeros((m.eta_size, m.nv))
             if m.eta_size:
-                full = m.vehicle.pose_jacobian(self.eta)
                 columns = m._eta_columns
-                J[:, : m.n_vehicle] = full if columns is None else full[:, columns]
+                if columns is None:  # every vehicle rate actuated: the block is J_eta itself
+                    J.put(m._eta_block, m.vehicle.pose_jacobian_values(self.eta))
+                else:
+                    J[:, : m.n_vehicle] = m.vehicle.pose_jacobian(self.eta)[:, columns]
             J.setflags(write=False)
             self._eta_jacobian = J
         return J
