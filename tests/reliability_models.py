@@ -7,7 +7,7 @@ finite joint and rate limits) on a planar or a spatial vehicle, built once per s
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -35,7 +35,7 @@ KINDS = ("planar", "spatial")
 JOINTS = (3, 4, 5, 6, 7)
 
 
-@lru_cache(maxsize=None)
+@cache
 def random_model(kind: str, n_joints: int, seed: int = 0) -> Model:
     """A random DH arm with ``n_joints`` revolute joints on a ``kind`` vehicle (cached)."""
     rng = np.random.default_rng(1000 * n_joints + seed + (0 if kind == "planar" else 500))

@@ -16,8 +16,8 @@ from regressions.corpus import corpus_files, load_problem, save_problem
 
 from uvms_qp.errors import InputError
 from uvms_qp.hqp import HierarchySolver, available_solvers
-from uvms_qp.hqp.registry import get_spec
 from uvms_qp.hqp.evaluate import hard_feasible
+from uvms_qp.hqp.registry import get_spec
 from uvms_qp.safety import SOLVED_STAGES, SafeSolver, hard_violation_of
 
 FILES = corpus_files()

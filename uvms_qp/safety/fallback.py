@@ -186,7 +186,6 @@ class SafeSolver:
         self.clip_flag_tol = as_scalar(clip_flag_tol, "clip_flag_tol", positive=True)
         self.relax = bool(relax)
         self.strict = bool(strict)
-        self._weights = weights
         self._options = dict(options or {})
         self.primary = HierarchySolver(
             solver, weights, {**backend_limits(get_spec(solver).name, self.deadline),
@@ -199,7 +198,12 @@ class SafeSolver:
             if alternate == self.name:
                 alternate = None
         self.alternate_name: str | None = alternate
-        self._alternate: HierarchySolver | None = None
+        # built now: importing a back-end (or SciPy's LP used to confirm an empty hard set) on
+        # first use would be a solve-time spike at run time
+        import scipy.optimize  # noqa: F401
+
+        self._alternate: HierarchySolver | None = None if alternate is None else HierarchySolver(
+            alternate, weights, backend_limits(alternate, self.deadline))
         self.previous: FloatArray | None = None
         self.consecutive = 0
         #: How many steps ended on each stage since construction (for reports and soaks).
@@ -209,11 +213,7 @@ class SafeSolver:
     # ------------------------------------------------------------------------------ plumbing
     @property
     def alternate(self) -> HierarchySolver | None:
-        """The alternate solver (built on first use), or None."""
-        if self._alternate is None and self.alternate_name is not None:
-            self._alternate = HierarchySolver(
-                self.alternate_name, self._weights,
-                backend_limits(self.alternate_name, self.deadline))
+        """The alternate solver, or None."""
         return self._alternate
 
     @property

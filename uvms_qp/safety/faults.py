@@ -119,6 +119,36 @@ class FaultyBackend:
         return BackendOutput(x, Status.OPTIMAL, "")
 
 
+class RandomFaults(FaultyBackend):
+    """A back-end that fails on a random share of its calls, with a random :class:`Fault`.
+
+    Args:
+        inner: The real back-end.
+        rate: Probability that a call fails, ``0 <= rate <= 1``.
+        rng: Random generator (seeded by the caller for reproducible soaks).
+        faults: Failure modes drawn from (default: all).
+        sleep: Sleep time of :attr:`Fault.SLEEP` [s].
+    """
+
+    def __init__(self, inner: Any, rate: float, rng: np.random.Generator,
+                 faults: Iterable[Fault | str] = tuple(Fault), sleep: float = 0.05) -> None:
+        kinds = tuple(Fault(f) for f in faults)
+        super().__init__(inner, kinds[0], sleep=sleep)
+        self.kinds = kinds
+        self.rate = float(rate)
+        self.rng = rng
+        #: Faults injected so far, by kind.
+        self.by_kind: dict[Fault, int] = dict.fromkeys(kinds, 0)
+
+    def _fires(self) -> bool:
+        self.n_calls += 1
+        if self.rng.uniform() >= self.rate:
+            return False
+        self.fault = self.kinds[int(self.rng.integers(len(self.kinds)))]
+        self.by_kind[self.fault] += 1
+        return True
+
+
 def inject(solver: HierarchySolver, fault: Fault | str, **kwargs: Any) -> FaultyBackend:
     """Wrap the back-end of ``solver`` in a :class:`FaultyBackend` and return the wrapper.
 
@@ -128,5 +158,13 @@ def inject(solver: HierarchySolver, fault: Fault | str, **kwargs: Any) -> Faulty
         **kwargs: ``calls``, ``count``, ``sleep`` (see :class:`FaultyBackend`).
     """
     wrapper = FaultyBackend(solver._backend, fault, **kwargs)
+    solver._backend = wrapper
+    return wrapper
+
+
+def inject_random(solver: HierarchySolver, rate: float, rng: np.random.Generator,
+                  **kwargs: Any) -> RandomFaults:
+    """Wrap the back-end of ``solver`` in a :class:`RandomFaults` and return the wrapper."""
+    wrapper = RandomFaults(solver._backend, rate, rng, **kwargs)
     solver._backend = wrapper
     return wrapper
