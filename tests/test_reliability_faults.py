@@ -1,0 +1,136 @@
+"""Fault injection through the controller: every step safe, the stage named, no after-effects.
+
+The demo stack (bluerov2_demo: five levels, all hard bounds) is stepped along the states of a
+clean reference run; the primary back-end of a second controller fails at step K (or for N steps
+from K). Every command is finite and inside the box, the stage that produced it is in the result
+and its summary, and once the back-end solves again the commands equal the reference ones: a
+failure leaves no trace in later steps (warm starts and fallback memory are not poisoned).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvms_qp.controller import Controller
+from uvms_qp.errors import NoSolutionFound
+from uvms_qp.safety import DEGRADED_STAGES
+from uvms_qp.safety.faults import Fault, inject
+from uvms_qp.sim.scenario import load_scenario
+
+K = 12
+STEPS = 30
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """States and commands of a clean closed-loop run of the demo (daqp)."""
+    sc = load_scenario("bluerov2_demo")
+    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric)
+    q = np.array(sc.q0)
+    qs, zetas = [], []
+    for k in range(STEPS):
+        qs.append(q)
+        res = ctrl.step(sc.model.state(q), k * sc.dt)
+        assert res.stage == "primary"
+        zetas.append(res.zeta)
+        q = sc.model.integrate(q, res.zeta, sc.dt)
+    return qs, zetas
+
+
+def replay(qs, fault, *, start=K, count=1, armed=False, everything=False, strict=False,
+           deadline=None, sleep=0.05, times=None):
+    """Step a fresh demo controller along ``qs``; from step ``start`` the next ``count`` back-end
+    calls fail (or, with ``armed``, every call during steps start..start+count-1 fails).
+    ``everything`` faults the alternate back-end as well."""
+    sc = load_scenario("bluerov2_demo")
+    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric, strict=strict,
+                      deadline=deadline)
+    wrappers = [inject(ctrl.safe.primary, fault, sleep=sleep)]
+    if everything:
+        wrappers.append(inject(ctrl.safe.alternate, fault, sleep=sleep))
+    out = []
+    for k, q in enumerate(qs):
+        for w in wrappers:
+            if armed:
+                w.armed = start <= k < start + count
+            elif k == start:
+                w.remaining = count
+        t = k * sc.dt if times is None else times[k]
+        out.append(ctrl.step(sc.model.state(q), t))
+    return out
+
+
+def assert_safe(res):
+    assert np.all(np.isfinite(res.zeta))
+    assert np.all(res.zeta >= res.lower) and np.all(res.zeta <= res.upper)
+
+
+@pytest.mark.parametrize("fault", [f for f in Fault if f is not Fault.SLEEP])
+def test_one_failure_is_caught_and_leaves_no_trace(reference, fault):
+    qs, zetas = reference
+    results = replay(qs, fault)
+    for k, res in enumerate(results):
+        assert_safe(res)
+        if k == K:
+            assert res.stage == "cold_retry" and res.attempts, res.summary()
+            assert "[fallback: cold_retry]" in res.summary()
+            assert "rejected: primary:" in res.summary()
+        else:
+            assert res.stage == "primary"
+        # the cold retry solves the same problem: same command; later steps unchanged
+        assert np.max(np.abs(res.zeta - zetas[k])) <= 1e-7, (k, res.summary())
+
+
+@pytest.mark.parametrize("count, stages", [
+    (1, ["cold_retry", "primary"]),
+    (3, ["alternate", "cold_retry", "primary"]),  # 2 failed calls at step K, the 3rd at K+1
+    (100, ["alternate"] * 50 + ["primary"]),  # 2 failed calls per step
+])
+def test_repeated_failures(reference, count, stages):
+    qs, zetas = reference
+    n = K + len(stages) + 2
+    states = (qs * 4)[:n] if n > len(qs) else qs[:n]
+    results = replay(states, Fault.NAN_SUCCESS, count=count)
+    assert [r.stage for r in results[K: K + len(stages)]] == stages
+    for res in results:
+        assert_safe(res)
+        assert res.ok  # every stage reached solves the full problem
+    back = K + len(stages) - 1
+    if n <= len(qs):
+        assert np.max(np.abs(results[back].zeta - zetas[back])) <= 1e-7
+
+
+def test_all_back_ends_down_for_100_steps_holds_zero_then_recovers(reference):
+    qs, zetas = reference
+    long_qs = qs[:K] + [qs[K]] * 100 + qs[K:K + 5]
+    dt = 0.05
+    times = [k * dt for k in range(K)] + [K * dt] * 100 + [(K + j) * dt for j in range(5)]
+    results = replay(long_qs, Fault.RAISE_FOREIGN, count=100, armed=True, everything=True,
+                     times=times)
+    stages = [r.stage for r in results[K:K + 100]]
+    assert stages[:3] == ["decayed_previous"] * 3 or set(stages[:3]) <= {"decayed_previous",
+                                                                           "relaxed", "zero"}
+    assert set(stages[3:]) == {"hold_zero"}
+    for res in results[K + 3:K + 100]:
+        assert_safe(res)
+        assert not np.any(res.zeta)  # zero held
+        assert res.status.value == "backend_error" and res.stage in DEGRADED_STAGES
+    back = results[K + 100]
+    assert back.stage == "primary" and np.max(np.abs(back.zeta - zetas[K])) <= 1e-7
+
+
+def test_sleep_past_the_deadline_is_reported_and_used(reference):
+    qs, zetas = reference
+    results = replay(qs[:K + 2], Fault.SLEEP, armed=True, deadline=0.01, sleep=0.03)
+    late = results[K]
+    assert late.deadline_missed and late.stage == "primary"
+    assert np.max(np.abs(late.zeta - zetas[K])) <= 1e-7
+    assert not results[K + 1].deadline_missed
+
+
+def test_strict_controller_raises_no_solution_found(reference):
+    qs, _ = reference
+    with pytest.raises(NoSolutionFound) as info:
+        replay(qs[:K + 1], Fault.WILD_FAILURE, armed=True, everything=True, strict=True)
+    assert info.value.result is not None
