@@ -45,8 +45,8 @@ from ..hqp.evaluate import evaluate, hard_feasible
 from ..hqp.problem import Problem
 from ..hqp.registry import available_solvers, get_spec
 from .deadline import Deadline, backend_limits
-from .saturation import CLIP_FLAG_TOL, saturate
-from .verify import verify_point, verify_solution
+from .saturation import CLIP_FLAG_TOL, Saturation, saturate
+from .verify import verify_point, verify_result
 
 PRIMARY = "primary"
 COLD_RETRY = "cold_retry"
@@ -209,6 +209,7 @@ class SafeSolver:
         #: How many steps ended on each stage since construction (for reports and soaks).
         self.stage_counts: Counter[str] = Counter()
         self._last: HierarchyResult | None = None
+        self._sat: Saturation | None = None
 
     # ------------------------------------------------------------------------------ plumbing
     @property
@@ -236,7 +237,10 @@ class SafeSolver:
 
     def _attempt(self, solver: HierarchySolver, problem: Problem, stage: str, tol: float,
                  attempts: list[str]) -> HierarchyResult | None:
-        """Run one back-end call; return its result if verified, else record why and None."""
+        """Run one back-end call; return its result if verified, else record why and None.
+
+        The saturation of a verified ``x`` is kept in ``self._sat`` for :meth:`_solved`.
+        """
         try:
             result = solver.solve_problem(problem)
         except Exception as exc:  # any back-end exception, ours or foreign, is a failed stage
@@ -244,8 +248,9 @@ class SafeSolver:
             self._last = None
             return None
         self._last = result
-        verdict = verify_solution(problem, result, tol)
+        verdict, sat = verify_result(problem, result, tol)
         if verdict.ok:
+            self._sat = sat
             return result
         if verdict.reason == "not_a_solution":
             detail = result.status.value + (f" ({result.message})" if result.message else "")
@@ -332,13 +337,16 @@ class SafeSolver:
 
     def _solved(self, problem: Problem, result: HierarchyResult, stage: str,
                 attempts: list[str], clock: Deadline, dropped: int) -> SafeSolve:
-        sat = saturate(result.x, problem.lower, problem.upper, self.clip_flag_tol)
+        sat = self._sat
+        if sat is None or sat.x.shape != result.x.shape:  # pragma: no cover - set by _attempt
+            sat = saturate(result.x, problem.lower, problem.upper)
         self.previous = sat.x
         self.consecutive = 0
         self.stage_counts[stage] += 1
         elapsed = clock.elapsed()
-        return SafeSolve(sat.x, result, stage, tuple(attempts), sat.clipped, sat.flagged,
-                         elapsed > clock.budget, dropped, elapsed)
+        return SafeSolve(sat.x, result, stage, tuple(attempts), sat.clipped,
+                         sat.clipped > self.clip_flag_tol, elapsed > clock.budget, dropped,
+                         elapsed)
 
     def _degraded(self, problem: Problem, status: Status, attempts: list[str], clock: Deadline,
                   hold: bool, tol: float) -> SafeSolve:

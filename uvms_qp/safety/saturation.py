@@ -48,5 +48,6 @@ def saturate(x: FloatArray, lower: FloatArray, upper: FloatArray,
         The saturated command and the clip amount.
     """
     xs = np.minimum(np.maximum(x, lower), upper)
-    clipped = float(np.max(np.abs(xs - x), initial=0.0))
+    d = xs - x
+    clipped = float(np.abs(d).max()) if d.size else 0.0  # NaN in x gives NaN here
     return Saturation(xs, clipped, clipped > flag_tol)

@@ -4,12 +4,14 @@ A solution ``x`` (zeta for a robot: [m/s, rad/s]) is *verified* when
 
 * it has the problem's length and every entry is finite;
 * the hard box holds: ``lower - tol <= x <= upper + tol``;
-* the hard rows hold: ``lo_H - tol <= A_H x <= hi_H + tol``;
+* the hard rows hold at the saturated command ``x_sat = clip(x, lower, upper)``:
+  ``lo_H - tol <= A_H x_sat <= hi_H + tol``;
 * the reported status is a solution status (``optimal`` or ``level_infeasible``).
 
 ``tol = hard_tol * max(1, max |finite hard side|)`` (relative, the solver's own hard tolerance;
 1e-9 for every registered back-end). Everything is vectorised numpy: the happy path costs a few
-microseconds at the sizes of a UVMS (n ~ 10, tens of rows).
+microseconds at the sizes of a UVMS (n ~ 10, tens of rows), and the saturation computed for the
+box check is the one the command goes out with.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import numpy as np
 from .._validation import FloatArray
 from ..hqp.problem import Problem
 from ..hqp.result import HierarchyResult, Status
+from .saturation import Saturation, saturate
 
 #: Reasons a verification fails (the vocabulary of :attr:`Verdict.reason`).
 REASONS: tuple[str, ...] = (
@@ -73,21 +76,44 @@ def verify_point(problem: Problem, x: FloatArray | None, tol: float) -> Verdict:
         x: Candidate point, shape (n,), or None.
         tol: Absolute tolerance on every hard side.
     """
-    if x is None or np.shape(x) != (problem.n,):
-        return Verdict(False, "wrong_shape", math.inf)
-    if not math.isfinite(float(np.sum(x))) or not np.all(np.isfinite(x)):
-        return Verdict(False, "non_finite", math.inf)
-    box = max(0.0, float(np.max(problem.lower - x)), float(np.max(x - problem.upper)))
-    if box > tol:
-        return Verdict(False, "box_violated", box)
-    v = box
+    verdict, _ = verify_command(problem, x, tol)
+    return verdict
+
+
+def verify_command(problem: Problem, x: FloatArray | None,
+                   tol: float) -> tuple[Verdict, Saturation | None]:
+    """Saturate ``x`` into the box and check it: the happy path of every control step.
+
+    The box violation of ``x`` is exactly the amount the saturation removes, so the clip is
+    computed once and reused: ``x_sat = min(max(x, lower), upper)``, ``box = max |x_sat - x|``.
+    NaN and inf need no separate pass: they make ``box`` NaN or inf, which fails ``box <= tol``
+    (only then is the reason refined). The hard rows are checked at ``x_sat``, the command that
+    is actually sent.
+
+    Args:
+        problem: The normalised problem.
+        x: Candidate point, shape (n,), or None.
+        tol: Absolute tolerance on every hard side.
+
+    Returns:
+        The verdict, and the saturation of ``x`` (None when ``x`` has the wrong shape).
+    """
+    if x is None or getattr(x, "shape", None) != (problem.n,):
+        return Verdict(False, "wrong_shape", math.inf), None
+    sat = saturate(x, problem.lower, problem.upper)
+    box = sat.clipped
+    if not box <= tol:
+        if not np.all(np.isfinite(x)):
+            return Verdict(False, "non_finite", math.inf), sat
+        return Verdict(False, "box_violated", box), sat
     hard = problem.hard
     if hard.m:
-        y = hard.A @ x
-        v = max(v, float(np.max(hard.lo - y)), float(np.max(y - hard.hi)))
-        if v > tol:
-            return Verdict(False, "hard_rows_violated", v)
-    return Verdict(True, "", v)
+        y = hard.A @ sat.x
+        v = float(np.max(np.maximum(hard.lo - y, y - hard.hi)))
+        if not v <= tol:
+            return Verdict(False, "hard_rows_violated", v), sat
+        box = max(box, v)
+    return Verdict(True, "", box), sat
 
 
 def hard_tolerance(problem: Problem, hard_tol: float) -> float:
@@ -106,9 +132,13 @@ def verify_solution(problem: Problem, result: HierarchyResult, tol: float) -> Ve
         result: The solver's result.
         tol: Absolute tolerance on every hard side (see :func:`hard_tolerance`).
     """
-    verdict = verify_point(problem, result.x, tol)
-    if not verdict.ok:
-        return verdict
-    if result.status not in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
-        return Verdict(False, "not_a_solution", verdict.violation)
-    return verdict
+    return verify_result(problem, result, tol)[0]
+
+
+def verify_result(problem: Problem, result: HierarchyResult,
+                  tol: float) -> tuple[Verdict, Saturation | None]:
+    """:func:`verify_solution` that also returns the saturation of ``result.x``."""
+    verdict, sat = verify_command(problem, result.x, tol)
+    if verdict.ok and result.status not in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
+        return Verdict(False, "not_a_solution", verdict.violation), sat
+    return verdict, sat
