@@ -2,17 +2,29 @@
 
 Problem: n variables, levels of sizes [6, 3, 1, 4] of random equality rows, box bounds on every
 variable that are wide (inactive), tight (some active) or saturated (most active). For "daqp" the
-table shows, from the same runs, DAQP's own reported C time (setup + solve) next to the wall
-time of ``solve_hierarchy`` (validation included), of a reused ``HierarchySolver`` fed ``Rows``,
-and of ``solve_problem`` on a normalised problem, plus a bare ``daqp.solve`` call on the same data.
+table shows, from the same interleaved runs (every variant is called once per round, so all see
+the same machine load), DAQP's own reported C time next to the wall time of
 
-Run: ``python benchmarks/bench_hqp.py [--repeat N] [--cascade-repeat M]``.
+* ``solve_hierarchy`` on ``(A, b)`` tuples (public entry, validation included),
+* a reused ``HierarchySolver`` fed ``Rows``,
+* ``solve_problem`` on a normalised problem (the trusted entry a controller uses),
+* the same two entries on the reference path (``lean=False``: full normalisation, stacking and
+  evaluation on the ``Problem``; this is what every call cost before the lean path),
+* a bare ``daqp.solve`` call and a reused ``daqp.Model`` (``update`` + ``solve``) on the same data:
+  the floor of any Python wrapper.
+
+The ratio column is the median wall time over the median DAQP C time of the lean
+``solve_hierarchy`` runs (the issue's target is <= 2x). Cascades and the closed form follow.
+
+Run: ``python benchmarks/bench_hqp.py [--repeat N] [--cascade-repeat M] [--sizes 10 13 30]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -38,6 +50,18 @@ def median_us(fn, repeat: int) -> tuple[float, list]:
     return float(np.median(times) * 1e6), out
 
 
+def interleaved(fns: dict[str, Callable[[], Any]], repeat: int) -> dict[str, tuple[float, Any]]:
+    """Median wall time [us] of each function and its last output, called round-robin."""
+    times: dict[str, list[float]] = {k: [] for k in fns}
+    last: dict[str, Any] = {}
+    for _ in range(repeat):
+        for k, fn in fns.items():
+            t = time.perf_counter()
+            last[k] = fn()
+            times[k].append(time.perf_counter() - t)
+    return {k: (float(np.median(v) * 1e6), last[k]) for k, v in times.items()}
+
+
 def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str, float, str]]:
     import daqp
 
@@ -45,15 +69,9 @@ def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str,
     levels = [[pair] for pair in pairs]
     rows = [[Rows(A, b, b)] for A, b in pairs]  # trusted construction, as a controller does
     lo, hi = -np.full(n, BOXES[box]), np.full(n, BOXES[box])
-    rows_out = []
-
-    t_api, res = median_us(lambda: solve_hierarchy(levels, lo, hi, solver="daqp"), repeat)
-    c_time = np.median([r.info["daqp_solve_time"] + r.info["daqp_setup_time"] for r in res])
-    status = str(res[-1].status)
-    solver = HierarchySolver("daqp")
-    t_rows, _ = median_us(lambda: solver.solve(rows, lo, hi), repeat)
     problem = normalize_problem(levels, lo, hi)
-    t_prob, _ = median_us(lambda: solver.solve_problem(problem), repeat)
+    lean_rows, lean_prob = HierarchySolver("daqp"), HierarchySolver("daqp")
+    ref_api, ref_prob = HierarchySolver("daqp", lean=False), HierarchySolver("daqp", lean=False)
 
     A = np.vstack([A for A, _ in pairs])
     b = np.concatenate([b for _, b in pairs])
@@ -61,30 +79,63 @@ def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str,
     sense = np.zeros(bu.size, dtype=np.intc)
     bp = np.cumsum([n, *SIZES]).astype(np.intc)
     H, f = np.eye(n), np.zeros(n)
-    t_bare, bare = median_us(lambda: daqp.solve(H, f, A, bu, bl, sense, break_points=bp,
-                                                rho_soft=1e-8), repeat)
-    c_bare = np.median([r[3]["solve_time"] + r[3]["setup_time"] for r in bare])
+    model = daqp.Model()
+    model.setup(H, f, A, bu, bl, sense, break_points=bp)
+    settings = model.settings
+    settings.update(rho_soft=1e-8, primal_tol=1e-10)
+    model.settings = settings
 
-    rows_out.append(("daqp: DAQP-reported C time", c_time * 1e6, status))
-    rows_out.append(("daqp: solve_hierarchy (tuples)", t_api, f"{t_api / (c_time * 1e6):.1f}x C"))
-    rows_out.append(("daqp: HierarchySolver(Rows)", t_rows, f"{t_rows / (c_time * 1e6):.1f}x C"))
-    rows_out.append(("daqp: solve_problem", t_prob, f"{t_prob / (c_time * 1e6):.1f}x C"))
-    rows_out.append(("bare daqp.solve (wall)", t_bare, f"C {c_bare * 1e6:.1f} us"))
+    def model_call():
+        model.update(A=A, bupper=bu, blower=bl)
+        return model.solve()
+
+    c_times: list[float] = []
+
+    def api():
+        result = solve_hierarchy(levels, lo, hi, solver="daqp")
+        c_times.append(result.info["daqp_solve_time"] + result.info["daqp_setup_time"])
+        return result
+
+    runs = interleaved({
+        "api": api,
+        "rows": lambda: lean_rows.solve(rows, lo, hi),
+        "prob": lambda: lean_prob.solve_problem(problem),
+        "ref_api": lambda: ref_api.solve(levels, lo, hi),
+        "ref_prob": lambda: ref_prob.solve_problem(problem),
+        "bare": lambda: daqp.solve(H, f, A, bu, bl, sense, break_points=bp, rho_soft=1e-8),
+        "model": model_call,
+    }, repeat)
+    c_us = float(np.median(c_times) * 1e6)
+
+    def ratio(key: str) -> str:
+        return f"{runs[key][0] / c_us:.1f}x C"
+
+    out = [
+        ("daqp: DAQP-reported C time", c_us, str(runs["api"][1].status)),
+        ("daqp: solve_hierarchy (tuples)", runs["api"][0], ratio("api")),
+        ("daqp: HierarchySolver(Rows)", runs["rows"][0], ratio("rows")),
+        ("daqp: solve_problem (trusted)", runs["prob"][0], ratio("prob")),
+        ("daqp reference: solve (tuples)", runs["ref_api"][0], ratio("ref_api")),
+        ("daqp reference: solve_problem", runs["ref_prob"][0], ratio("ref_prob")),
+        ("bare daqp.solve (wall)", runs["bare"][0], ratio("bare")),
+        ("daqp.Model update+solve (wall)", runs["model"][0], ratio("model")),
+    ]
     for name in available_solvers():
         if name == "daqp" or (name == "nullspace" and box != "wide"):
             continue
         s = HierarchySolver(name)
         t, res = median_us(lambda s=s: s.solve_problem(problem), cascade_repeat)
-        rows_out.append((name, t, str(res[-1].status)))
-    return rows_out
+        out.append((name, t, str(res[-1].status)))
+    return out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2000)
     parser.add_argument("--cascade-repeat", type=int, default=40)
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 13, 30])
     args = parser.parse_args()
-    for n in (10, 13, 30):
+    for n in args.sizes:
         for box in BOXES:
             print(f"\nn = {n}, levels {list(SIZES)}, {box} box (|x| <= {BOXES[box]:g})")
             print(f"  {'solver':<34} {'median us':>10}  note")

@@ -15,6 +15,8 @@ from .problem import Problem
 from .result import HierarchyResult, StackedResult, Status
 from .workspace import Workspace, finite_abs_max
 
+_CLAIMED = (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+
 
 def hard_violation(problem: Problem, x: FloatArray) -> float:
     """Largest violation of the hard box and hard rows at ``x`` (0 when feasible)."""
@@ -186,7 +188,7 @@ def evaluate_stacked(
     r = np.sqrt(ws.G.dot(w * sl * sl))
     residuals = r.tolist()
     infeasible_level = None
-    if status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE):
+    if status in _CLAIMED:
         if hv > hard_tol and hv > hard_tol * finite_abs_max(lo[:head], hi[:head]):
             status = Status.BACKEND_ERROR
             message = (message + "; " if message else "") + f"hard rows violated by {hv:.2e}"

@@ -41,6 +41,7 @@ class Workspace:
     Attributes:
         key: ``(n, m_H, sizes)``.
         A: Augmented row matrix ``[I; A_H; A_1; ...; A_p]``, shape (M, n).
+        daqp_A: View ``A[n:]`` of the general rows handed to DAQP.
         bu: DAQP upper sides (``hi`` clamped to ``1e30``), shape (M,).
         bl: DAQP lower sides (``lo`` clamped to ``-1e30``), shape (M,).
         G: Level-summing 0/1 matrix, shape (p, sum m_k).
@@ -71,11 +72,7 @@ class Workspace:
         for k, (a, b) in enumerate(zip(self.starts, self.ends, strict=True)):
             self.G[k, a:b] = 1.0
         self.ones = np.ones(ml)
-
-    @property
-    def daqp_A(self) -> FloatArray:
-        """The general rows DAQP sees (hard rows, then every level), a view of ``A``."""
-        return self.A[self.n:]
+        self.daqp_A = self.A[self.n:]  # the general rows DAQP sees: hard rows, then levels
 
     def load_problem(self, problem: Problem) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Copy a normalised problem into the buffers; return fresh ``(lo, hi, w)``.
