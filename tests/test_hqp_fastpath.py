@@ -176,3 +176,11 @@ def test_reference_continuation_from_first_answer(mixed, monkeypatch):
     lean, ref = HierarchySolver("daqp"), HierarchySolver("daqp", lean=False)
     for levels, lower, upper, hard in mixed[:150]:
         assert_same(lean.solve(levels, lower, upper, hard), ref.solve(levels, lower, upper, hard))
+
+
+def test_stacked_slacks_are_the_level_slacks_end_to_end(mixed):
+    for lean in (True, False):
+        solver = HierarchySolver("daqp", lean=lean)
+        for levels, lower, upper, hard in mixed[:20]:
+            result = solver.solve(levels, lower, upper, hard)
+            assert np.array_equal(result.stacked_slacks, np.concatenate(result.level_slacks))

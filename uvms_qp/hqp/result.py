@@ -66,6 +66,15 @@ class HierarchyResult:
         """True when ``x`` is the lexicographic optimum (optimal or level_infeasible)."""
         return self.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
 
+    @property
+    def stacked_slacks(self) -> FloatArray:
+        """Signed slacks of every level row in priority order (``level_slacks`` end to end).
+
+        E.g. the squared violation of rows ``a:b`` of the stacked levels is
+        ``(s[a:b] ** 2).sum()`` without another product with the rows.
+        """
+        return np.concatenate(self.level_slacks) if self.level_slacks else np.zeros(0)
+
     def summary(self) -> str:
         """Return a short multi-line report a person can read."""
         lines = [
@@ -131,6 +140,7 @@ class StackedResult(HierarchyResult):
         self._lower = lower
         self._upper = upper
         self._slacks: list[FloatArray] | None = None
+        self._assigned = False
         self._active: tuple[np.ndarray, np.ndarray] | None = None
 
     @property  # type: ignore[override]
@@ -144,6 +154,14 @@ class StackedResult(HierarchyResult):
     @level_slacks.setter
     def level_slacks(self, value: list[FloatArray]) -> None:
         self._slacks = value
+        self._assigned = True
+
+    @property
+    def stacked_slacks(self) -> FloatArray:
+        """Signed slacks of every level row in priority order (a view, no copy)."""
+        if self._assigned:  # level_slacks were replaced from outside: follow them
+            return super().stacked_slacks
+        return self._s[self._head:]
 
     def _masks(self) -> tuple[np.ndarray, np.ndarray]:
         if self._active is None:
