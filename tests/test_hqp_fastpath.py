@@ -184,3 +184,16 @@ def test_stacked_slacks_are_the_level_slacks_end_to_end(mixed):
         for levels, lower, upper, hard in mixed[:20]:
             result = solver.solve(levels, lower, upper, hard)
             assert np.array_equal(result.stacked_slacks, np.concatenate(result.level_slacks))
+
+
+def test_metric_changed_in_place_is_noticed():
+    """The validated metric is cached, but an in-place change of the weights is honoured."""
+    W = np.array([1.0, 1.0])
+    solver = HierarchySolver("daqp", W)
+    level = [[(np.array([[1.0, 1.0]]), [1.0])]]
+    assert solver.solve(level).x == pytest.approx([0.5, 0.5], abs=1e-6)
+    W[0] = 3.0  # x0 three times as expensive: x = (0.25, 0.75)
+    assert solver.solve(level).x == pytest.approx([0.25, 0.75], abs=1e-6)
+    W[1] = -1.0
+    with pytest.raises(InputError, match="weights"):
+        solver.solve(level)

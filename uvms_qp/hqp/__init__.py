@@ -105,18 +105,30 @@ class HierarchySolver:
     def weights(self, value: Any) -> None:
         self._weights = value
         self._metric: FloatArray | None = None
+        self._metric_src = b""
 
     def _metric_for(self, n: int) -> FloatArray:
-        """The validated metric for n variables (validated once, then reused)."""
+        """The validated metric for n variables.
+
+        Validated once and reused while the given weights keep their values (an array changed
+        in place is noticed through its bytes and validated again).
+        """
+        raw = self._weights
+        src = b""
+        if raw is not None:
+            try:
+                src = np.asarray(raw, dtype=np.float64).tobytes()
+            except (TypeError, ValueError):
+                src = b"?"
         W = self._metric
-        if W is None or W.shape[0] != n:
-            if self._weights is None:
+        if W is None or W.shape[0] != n or src != self._metric_src:
+            if raw is None:
                 W = np.ones(n)
             else:
-                W = as_vector(self._weights, "weights", n)
+                W = as_vector(raw, "weights", n)
                 if np.any(W <= 0.0):
                     raise InputError(f"weights: expected a positive metric, got min {W.min():g}")
-            self._metric = W
+            self._metric, self._metric_src = W, src
         return W
 
     @property

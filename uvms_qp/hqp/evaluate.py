@@ -201,10 +201,8 @@ def evaluate_stacked(
                         infeasible_level = k
                         status = Status.LEVEL_INFEASIBLE
                         break
-    n = ws.n
     return StackedResult(x, status, solver, residuals, infeasible_level, hv, solve_time, message,
-                         info or {}, slacks=s, head=head, spans=ws.spans, lower=lo[:n],
-                         upper=hi[:n])
+                         info or {}, slacks=s, head=head, spans=ws.spans, lower=lo, upper=hi)
 
 
 def hard_feasible(problem: Problem) -> bool:

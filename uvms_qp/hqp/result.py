@@ -105,6 +105,16 @@ class StackedResult(HierarchyResult):
     ``level_slacks`` are views of it and ``active_lower``/``active_upper`` are computed from
     fresh copies of the bounds only when read. Every attribute has the value and meaning it has
     on :class:`HierarchyResult`; all of them can be assigned.
+
+    The first nine arguments are the :class:`HierarchyResult` fields of the same names; then
+
+    Args:
+        slacks: Stacked signed slacks (box, hard rows, level rows), owned by the result.
+        head: Number of box and hard-row entries before the level rows in ``slacks``.
+        spans: ``(start, end)`` of each level inside the level rows.
+        lower: Array whose first n entries are the lower bounds (e.g. the stacked lower sides);
+            owned by the result (never a reused buffer).
+        upper: Same for the upper bounds.
     """
 
     def __init__(
@@ -137,8 +147,7 @@ class StackedResult(HierarchyResult):
         self._s = slacks
         self._head = head
         self._spans = spans
-        self._lower = lower
-        self._upper = upper
+        self._bounds = (lower, upper)
         self._slacks: list[FloatArray] | None = None
         self._assigned = False
         self._active: tuple[np.ndarray, np.ndarray] | None = None
@@ -165,7 +174,8 @@ class StackedResult(HierarchyResult):
 
     def _masks(self) -> tuple[np.ndarray, np.ndarray]:
         if self._active is None:
-            lo, hi, x = self._lower, self._upper, self.x
+            n = self.x.shape[0]
+            lo, hi, x = self._bounds[0][:n], self._bounds[1][:n], self.x
             tol_lo = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(lo), lo, 0.0)))
             tol_hi = 1e-9 * (1.0 + np.abs(np.where(np.isfinite(hi), hi, 0.0)))
             self._active = (x - lo <= tol_lo, hi - x <= tol_hi)
