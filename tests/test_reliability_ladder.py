@@ -252,3 +252,22 @@ def test_alternates_and_construction_errors():
     with pytest.raises(InputError, match="max_fallbacks"):
         SafeSolver("daqp", max_fallbacks=0)
     assert set(STAGES) >= DEGRADED_STAGES
+
+
+def test_deadline_bounds_a_slow_cascade():
+    """ProxQP's cascade needs ~18 s on this badly scaled regression problem (gain 1e9) without
+    limits; with a 50 ms deadline the step ends within one QP of the deadline, degraded and
+    flagged."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from regressions.corpus import HERE, load_problem
+
+    problem, _ = load_problem(HERE / "ee_gain_1e9_no_vehicle_bound.npz")
+    safe = SafeSolver("cascade:proxqp", deadline=0.05)
+    start = time.perf_counter()
+    out = safe.solve(problem)
+    assert time.perf_counter() - start < 1.5
+    assert out.deadline_missed and any("deadline passed" in a for a in out.attempts)
+    assert _safe(problem, out.x, 1e-9 * problem.hard_scale).ok

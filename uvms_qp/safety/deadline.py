@@ -6,9 +6,10 @@ Behaviour (also in ``docs/reliability.md``):
    time left with :func:`time.perf_counter`.
 2. Each back-end receives a time or iteration limit derived from the budget
    (:func:`backend_limits`): DAQP ``time_limit`` [s] (hierarchical mode and cascade), HiGHS,
-   OSQP and Clarabel ``time_limit`` [s], ProxQP and PIQP an iteration cap. A cascade passes the
-   limit to each of its QPs, so a cascade step can exceed the budget by the number of QPs it
-   solves; quadprog has no limit at all.
+   OSQP and Clarabel ``time_limit`` [s], ProxQP and PIQP an iteration cap; quadprog has none.
+   A cascade solves several QPs per step: :class:`CascadeGuard` refuses to start a QP once the
+   deadline has passed (the QP counts as failed, the cascade reports ``backend_error`` at once),
+   so a cascade step overruns by at most one QP.
 3. A back-end call cannot be pre-empted (it runs native code synchronously). When it returns
    after the deadline, its answer is still verified and, if verified, used (it is safe, and the
    freshest command available); the step is marked ``deadline_missed``.
@@ -67,9 +68,45 @@ _TIME_LIMITS: dict[str, str] = {
     "cascade:clarabel": "time_limit",
 }
 _ITERATION_LIMITS: dict[str, tuple[str, int]] = {
-    "cascade:proxqp": ("max_iter", 10_000),
+    "cascade:proxqp": ("max_iter", 200),
     "cascade:piqp": ("max_iter", 250),
 }
+
+
+class CascadeGuard:
+    """Stand-in for the ``qpsolvers`` module inside a cascade back-end: no QP after the deadline.
+
+    A :class:`~uvms_qp.hqp.backends.cascade.CascadeBackend` calls
+    ``qpsolvers.solve_problem`` once per QP through its ``_qpsolvers`` attribute;
+    :func:`guard_cascade` replaces that attribute by this guard. Every other attribute is the
+    module's. ``end`` is the ``time.perf_counter()`` instant after which ``solve_problem`` raises
+    :class:`TimeoutError` (which the cascade treats as a failed QP); None disables the guard.
+    """
+
+    def __init__(self, module: Any) -> None:
+        self._module = module
+        self.end: float | None = None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._module, name)
+
+    def solve_problem(self, *args: Any, **kwargs: Any) -> Any:
+        """``qpsolvers.solve_problem``, unless the deadline has passed."""
+        if self.end is not None and time.perf_counter() > self.end:
+            raise TimeoutError("step deadline passed: QP not started")
+        return self._module.solve_problem(*args, **kwargs)
+
+
+def guard_cascade(backend: Any) -> CascadeGuard | None:
+    """Install a :class:`CascadeGuard` in a cascade back-end; None for other back-ends."""
+    module = getattr(backend, "_qpsolvers", None)
+    if module is None:
+        return None
+    if isinstance(module, CascadeGuard):
+        return module
+    guard = CascadeGuard(module)
+    backend._qpsolvers = guard
+    return guard
 
 
 def backend_limits(solver: str, budget: float | None) -> dict[str, Any]:

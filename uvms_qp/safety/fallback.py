@@ -32,6 +32,7 @@ command against the *full* problem, so per-level residuals and the status are tr
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -44,7 +45,7 @@ from ..hqp import HierarchyResult, HierarchySolver, Status
 from ..hqp.evaluate import evaluate, hard_feasible
 from ..hqp.problem import Problem
 from ..hqp.registry import available_solvers, get_spec
-from .deadline import Deadline, backend_limits
+from .deadline import CascadeGuard, Deadline, backend_limits, guard_cascade
 from .saturation import CLIP_FLAG_TOL, Saturation, saturate
 from .verify import verify_point, verify_result
 
@@ -204,6 +205,12 @@ class SafeSolver:
 
         self._alternate: HierarchySolver | None = None if alternate is None else HierarchySolver(
             alternate, weights, backend_limits(alternate, self.deadline))
+        self._guards: list[CascadeGuard] = []
+        if self.deadline is not None and math.isfinite(self.deadline):
+            for hs in (self.primary, self._alternate):
+                guard = None if hs is None else guard_cascade(getattr(hs, "_backend", None))
+                if guard is not None:
+                    self._guards.append(guard)
         self.previous: FloatArray | None = None
         self.consecutive = 0
         #: How many steps ended on each stage since construction (for reports and soaks).
@@ -274,6 +281,8 @@ class SafeSolver:
             NoSolutionFound: strict mode, and no solver stage produced a verified solve.
         """
         clock = Deadline(self.deadline, start)
+        for guard in self._guards:
+            guard.end = clock.end
         tol = self.primary.hard_tol * problem.hard_scale
         attempts: list[str] = []
         self._last = None
