@@ -78,7 +78,6 @@ class StationKeepingTask(ErrorTask):
         self._target_arg = None if target is None else as_vector(target, f"{self.name}.target")
         self.axes: list[str] = []
         self._idx: Any = np.zeros(0, dtype=int)
-        self._angle = np.zeros(0, dtype=bool)
         self._angle_pos: list[int] = []
         self._target: FloatArray | None = None
 
@@ -103,7 +102,6 @@ class StationKeepingTask(ErrorTask):
                              f"{axes}, got {self._target_arg.shape[0]}")
         self.axes = list(axes)
         self._idx = compact_index([known.index(a) for a in axes])
-        self._angle = np.array([a in ANGLE_AXES for a in axes], dtype=bool)
         self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
         self._target = None if self._target_arg is None else self._target_arg.copy()
         return len(axes)
