@@ -51,8 +51,8 @@ def test_every_fault_gives_a_verified_command_and_names_the_stage(solver, fault)
     problem = _problem(1)
     reference = SafeSolver(solver).solve(problem)
     assert reference.stage == "primary"
-    safe = SafeSolver(solver, deadline=0.005)
-    wrapper = inject(safe.primary, fault, count=1, sleep=0.02)
+    safe = SafeSolver(solver, deadline=0.1)  # generous: the machine may be loaded
+    wrapper = inject(safe.primary, fault, count=1, sleep=0.15)
     out = safe.solve(problem)
     assert wrapper.n_faults == 1
     assert _safe(problem, out.x).ok
@@ -195,7 +195,7 @@ def test_deadline_skips_the_solver_stages_after_a_late_failure():
     out = safe2.solve(problem)
     assert out.stage == "decayed_previous" and out.deadline_missed
     assert any("deadline passed" in a for a in out.attempts)
-    assert time.perf_counter() - start < 0.03 + 0.025  # one late call, nothing more
+    assert time.perf_counter() - start < 0.03 + 0.05  # one late call, nothing more
 
 
 def test_deadline_and_limits():
@@ -268,6 +268,6 @@ def test_deadline_bounds_a_slow_cascade():
     safe = SafeSolver("cascade:proxqp", deadline=0.05)
     start = time.perf_counter()
     out = safe.solve(problem)
-    assert time.perf_counter() - start < 1.5
+    assert time.perf_counter() - start < 3.0
     assert out.deadline_missed and any("deadline passed" in a for a in out.attempts)
     assert _safe(problem, out.x, 1e-9 * problem.hard_scale).ok
