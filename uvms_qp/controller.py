@@ -39,6 +39,7 @@ from .hqp import HierarchyResult, HierarchySolver, Status
 from .hqp.evaluate import evaluate
 from .hqp.problem import Block, Problem
 from .hqp.rows import Rows
+from .safety.fallback import PRIMARY, SafeSolver, default_alternate
 from .stack import Stack
 from .tasks.task import Task
 
@@ -65,8 +66,15 @@ class StepResult:
         solver: Back-end name.
         lower: Hard lower bounds on zeta used this tick (nv,).
         upper: Hard upper bounds on zeta used this tick (nv,).
-        saturated: True when the scheme's zeta had to be clipped into the box (nullspace).
+        saturated: True when zeta had to be clipped into the box by more than round-off
+            (nullspace scheme, or a fallback stage; see ``clipped``).
         level_names: Task names of each level.
+        stage: Stage of the fallback ladder that produced zeta (:mod:`uvms_qp.safety`):
+            ``primary`` on the happy path; ``cold_retry``, ``alternate``, ``relaxed`` (verified
+            solves), ``decayed_previous``, ``zero``, ``hold_zero`` (degraded commands).
+        clipped: Amount the final saturation removed from the solver's zeta [m/s, rad/s].
+        deadline_missed: The step took longer than the controller's ``deadline``.
+        attempts: Why each earlier stage was rejected (empty on the happy path).
     """
 
     zeta: FloatArray
@@ -80,6 +88,10 @@ class StepResult:
     upper: FloatArray
     saturated: bool = False
     level_names: tuple[tuple[str, ...], ...] = ()
+    stage: str = PRIMARY
+    clipped: float = 0.0
+    deadline_missed: bool = False
+    attempts: tuple[str, ...] = ()
     _task_names: tuple[str, ...] = ()
     _rate_units: tuple[str, ...] = ()
     _error_units: tuple[str, ...] = ()
@@ -88,10 +100,70 @@ class StepResult:
     _hard_rows_violation: float = 0.0
     _level_sizes: tuple[int, ...] = ()
 
+    @classmethod
+    def from_command(
+        cls,
+        zeta: FloatArray,
+        *,
+        t: float,
+        step_time: float,
+        scheme: str,
+        solver: str = "closed-form",
+        residuals: dict[str, tuple[float, str]] | None = None,
+        lower: FloatArray | None = None,
+        upper: FloatArray | None = None,
+        status: Status = Status.OPTIMAL,
+        message: str = "",
+    ) -> StepResult:
+        """Public constructor for schemes that compute zeta without a hierarchy solve.
+
+        The embedded :class:`~uvms_qp.hqp.HierarchyResult` carries ``zeta`` with ``status``, no
+        level residuals and the step time as solve time; ``task_residuals`` and ``task_errors``
+        report ``residuals`` (task name -> (norm, unit)).
+
+        Args:
+            zeta: Finite command (nv,) [m/s, rad/s].
+            t: Time of the tick [s].
+            step_time: Wall time of the step [s].
+            scheme: Name of the scheme.
+            solver: Name recorded as the solver.
+            residuals: Task name -> (error norm, unit).
+            lower: Box the command respects (default unbounded).
+            upper: Box the command respects (default unbounded).
+            status: Status to report.
+            message: Detail kept in ``hierarchy.message``.
+
+        Raises:
+            NonFiniteError: zeta holds NaN or inf.
+        """
+        z = np.asarray(zeta, dtype=np.float64)
+        if not np.all(np.isfinite(z)):
+            raise NonFiniteError(f"{scheme}: non-finite zeta at t = {t}")
+        n = z.shape[0]
+        res = residuals or {}
+        names = tuple(res)
+        values = np.asarray([res[k][0] for k in names], dtype=np.float64)
+        units = tuple(res[k][1] for k in names)
+        hierarchy = HierarchyResult(x=z, status=status, solver=solver, solve_time=step_time,
+                                    message=message)
+        return cls(
+            zeta=z, status=status, hierarchy=hierarchy, t=float(t), step_time=float(step_time),
+            scheme=scheme, solver=solver,
+            lower=np.full(n, -np.inf) if lower is None else lower,
+            upper=np.full(n, np.inf) if upper is None else upper,
+            level_names=(names,) if names else (), _task_names=names, _rate_units=units,
+            _error_units=units, _residual_sq=np.square(values),
+            _errors=tuple(np.array([v]) for v in values.tolist()))
+
     @property
     def ok(self) -> bool:
         """True when zeta is the scheme's optimum (``optimal`` or ``level_infeasible``)."""
         return self.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+
+    @property
+    def degraded(self) -> bool:
+        """True when zeta did not come from the primary back-end (see ``stage``)."""
+        return self.stage != PRIMARY
 
     @cached_property
     def task_residuals(self) -> dict[str, tuple[float, str]]:
@@ -129,7 +201,8 @@ class StepResult:
         """A readable report: status, time, per-level and per-task residuals with units."""
         lines = [f"t = {self.t:.3f} s  {self.scheme}/{self.solver}: {self.status.value}  "
                  f"step {self.step_time * 1e6:.0f} us"
-                 + ("  (saturated into the box)" if self.saturated else "")]
+                 + ("  (saturated into the box)" if self.saturated else "")
+                 + (f"  [fallback: {self.stage}]" if self.stage != PRIMARY else "")]
         res = self.task_residuals
         err = self.task_errors
         for k, names in enumerate(self.level_names):
@@ -142,6 +215,7 @@ class StepResult:
         lines.append(f"  hard bound violation {self.bound_violation:.1e}")
         if self.hierarchy.message:
             lines.append(f"  {self.hierarchy.message}")
+        lines.extend(f"  rejected: {a}" for a in self.attempts)
         return "\n".join(lines)
 
 
@@ -195,6 +269,11 @@ class Controller:
         scheme: ``"hqp"``, ``"weighted"`` or ``"nullspace"`` (see the module docstring).
         priority_ratio: Weight ratio between consecutive levels for ``scheme="weighted"``.
         options: Back-end options passed to :class:`~uvms_qp.hqp.HierarchySolver`.
+        strict: Raise :class:`~uvms_qp.errors.NoSolutionFound` when no back-end returns a
+            verified solution, instead of degrading (relaxed levels, decayed previous command,
+            zero; see :mod:`uvms_qp.safety` and ``docs/reliability.md``).
+        deadline: Wall-time budget of one step [s] (None: none); back-ends get matching time or
+            iteration limits and the fallback ladder skips its solver stages once it has passed.
 
     Raises:
         InputError: bad dt, metric or scheme; any binding error of the stack (unknown frame,
@@ -213,6 +292,8 @@ class Controller:
         scheme: Scheme = "hqp",
         priority_ratio: float = 1e4,
         options: dict[str, Any] | None = None,
+        strict: bool = False,
+        deadline: float | None = None,
     ) -> None:
         if not isinstance(stack, Stack):
             raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
@@ -235,7 +316,15 @@ class Controller:
             # DAQP's hierarchical mode normalises soft rows, which would erase the priority
             # weights; one weighted QP through DAQP as a plain QP keeps them.
             solver = "cascade:daqp"
-        self._solver = HierarchySolver(solver, weights=self.metric, options=options)
+        self.strict = bool(strict)
+        if scheme == "nullspace":
+            self._safe: SafeSolver | None = None
+            self._solver = HierarchySolver(solver, weights=self.metric, options=options)
+        else:
+            alternate = default_alternate(solver, cascade_only=scheme == "weighted")
+            self._safe = SafeSolver(solver, self.metric, options, alternate=alternate,
+                                    deadline=deadline, strict=self.strict)
+            self._solver = self._safe.primary
         self.solver_name = self._solver.name
         self._build_buffers()
 
@@ -375,9 +464,16 @@ class Controller:
         """All tasks, highest priority first."""
         return tuple(self._tasks)
 
+    @property
+    def safe(self) -> SafeSolver | None:
+        """The verifying, falling-back solver (None for the closed-form nullspace scheme)."""
+        return self._safe
+
     def reset(self) -> None:
-        """Reset the run-time memory of every task (activation poses, previous values)."""
+        """Reset the run-time memory of every task and of the fallback ladder."""
         self.stack.reset()
+        if self._safe is not None:
+            self._safe.reset()
 
     def level_rows(self, state: State, t: float = 0.0) -> list[Rows]:
         """Rows of every level at ``(state, t)`` (fresh copies; for inspection and tests)."""
@@ -434,10 +530,17 @@ class Controller:
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Compute zeta for ``state`` at time ``t`` [s].
 
+        Every command is verified and saturated into the hard box (``docs/reliability.md``):
+        when the back-end fails, the fallback ladder runs and ``StepResult.stage`` names the
+        stage that produced zeta.
+
         Raises:
             InputError: a task whose target was never set, a state of another model.
-            NonFiniteError: a task produced NaN/inf rows (the message names the task).
-            BoundsError: the hard box is empty (the message names the constraints involved).
+            NonFiniteError: a task produced NaN/inf rows (the message names the task); bad input
+                never reaches a back-end.
+            BoundsError: the hard box is empty (the message names the constraints involved): no
+                command can satisfy it.
+            NoSolutionFound: strict mode, and no back-end returned a verified solution.
         """
         start = time.perf_counter()
         if state.model is not self.model:
@@ -462,6 +565,8 @@ class Controller:
                 np.take(hi, idx, out=block.hi)
                 np.take(self._w, idx, out=block.w)
         saturated = False
+        stage, clipped, missed = PRIMARY, 0.0, False
+        attempts: tuple[str, ...] = ()
         if self.scheme == "nullspace":
             t0 = time.perf_counter()
             raw = nullspace_solve(problem)
@@ -472,8 +577,10 @@ class Controller:
                               level_tol=self._solver.level_tol, hard_tol=self._solver.hard_tol,
                               solve_time=time.perf_counter() - t0)
         else:
-            result = self._solver.solve_problem(problem)
-            zeta = result.x
+            safe = self._safe.solve(problem, start)  # type: ignore[union-attr]
+            result, zeta, stage = safe.result, safe.x, safe.stage
+            clipped, missed, attempts = safe.clipped, safe.deadline_missed, safe.attempts
+            saturated = safe.clip_flagged
         y = A @ zeta
         viol = np.maximum(lo - y, 0.0)
         viol += np.maximum(y - hi, 0.0)
@@ -487,7 +594,8 @@ class Controller:
             zeta=zeta, status=result.status, hierarchy=result, t=t,
             step_time=time.perf_counter() - start, scheme=self.scheme, solver=self.solver_name,
             lower=self._lower.copy(), upper=self._upper.copy(), saturated=saturated,
-            level_names=self.level_names, _task_names=self._task_names,
+            level_names=self.level_names, stage=stage, clipped=clipped, deadline_missed=missed,
+            attempts=attempts, _task_names=self._task_names,
             _rate_units=self._rate_units, _error_units=self._error_units, _residual_sq=sq,
             _errors=tuple(task._last_error for task in self._tasks), _hard_rows_violation=hard_v,
             _level_sizes=self._level_sizes)
