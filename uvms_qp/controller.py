@@ -153,7 +153,8 @@ class StepResult:
             upper=np.full(n, np.inf) if upper is None else upper,
             level_names=(names,) if names else (), _task_names=names, _rate_units=units,
             _error_units=units, _residual_sq=np.square(values),
-            _errors=tuple(np.array([v]) for v in values.tolist()))
+            _errors=tuple(np.array([v]) for v in values.tolist()),
+            _level_sizes=(len(names),) if names else ())
 
     @property
     def ok(self) -> bool:
