@@ -134,3 +134,19 @@ def test_strict_controller_raises_no_solution_found(reference):
     with pytest.raises(NoSolutionFound) as info:
         replay(qs[:K + 1], Fault.WILD_FAILURE, armed=True, everything=True, strict=True)
     assert info.value.result is not None
+
+
+def test_weighted_scheme_falls_back_to_a_weight_honouring_cascade(reference):
+    """DAQP's hierarchical mode would normalise the weighted rows: the weighted scheme's
+    alternate is a cascade on another library, and it gives the primary's answer."""
+    qs, _ = reference
+    sc = load_scenario("bluerov2_demo")
+    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric, scheme="weighted",
+                      priority_ratio=100.0)
+    assert ctrl.solver_name == "cascade:daqp"
+    assert ctrl.safe.alternate.name.startswith("cascade:")
+    clean = ctrl.step(sc.model.state(qs[K]), K * sc.dt)
+    inject(ctrl.safe.primary, Fault.RAISE_FOREIGN).armed = True
+    res = ctrl.step(sc.model.state(qs[K]), K * sc.dt)
+    assert res.stage == "alternate" and res.ok
+    assert np.max(np.abs(res.zeta - clean.zeta)) <= 1e-5

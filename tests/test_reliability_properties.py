@@ -11,18 +11,22 @@ quadprog cascade) 100 examples x 100 steps = 10^4 steps in CI:
 * >= 99.9 % of the steps end on a verified solve (optimal / level_infeasible, or relaxed): the
   hard rows drawn here always contain zeta = 0, so they are jointly feasible.
 
-Run more by hand: ``HYPOTHESIS_PROFILE=dev RELIABILITY_EXAMPLES=1000 pytest ...``.
+Run more by hand: ``HYPOTHESIS_PROFILE=dev RELIABILITY_EXAMPLES=1000 pytest ...``. The problem of
+every step that needed a fallback is saved under ``out/regressions/`` (git-ignored): move the
+interesting ones to ``tests/regressions/`` to replay them on every back-end.
 """
 
 from __future__ import annotations
 
 import os
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from regressions.corpus import save_problem
 from reliability_models import JOINTS, KINDS, random_model, random_stack, random_state
 
 from uvms_qp.controller import Controller
@@ -32,6 +36,15 @@ EXAMPLES = int(os.environ.get("RELIABILITY_EXAMPLES", "100"))
 STEPS = 100
 SOLVERS = ("daqp", "cascade:quadprog")
 TALLY: dict[str, Counter[str]] = {s: Counter() for s in SOLVERS}
+#: Problems of unsolved or violating steps are saved here (git-ignored) for the corpus.
+CAPTURE = Path(__file__).resolve().parents[1] / "out" / "regressions"
+
+
+def capture(ctrl, name: str, note: str) -> None:
+    """Save the problem of the controller's last step (first few per run only)."""
+    CAPTURE.mkdir(parents=True, exist_ok=True)
+    if len(list(CAPTURE.glob("*.npz"))) < 20:
+        save_problem(ctrl._new_problem(), name, note, CAPTURE)
 
 
 def run_example(solver: str, kind: str, n_joints: int, seed: int, reachable: bool) -> None:
@@ -60,6 +73,10 @@ def run_example(solver: str, kind: str, n_joints: int, seed: int, reachable: boo
         tally[res.stage] += 1
         if res.stage in SOLVED_STAGES:
             tally["solved"] += 1
+        if res.stage != "primary" or before > 1e-7:
+            capture(ctrl, f"{solver.replace(':', '_')}_{kind}_{n_joints}_{seed}_{k}",
+                    f"test_reliability_properties ({solver}): stage {res.stage}, violation "
+                    f"{before:.1e}; {'; '.join(res.attempts)}")
         q = model.integrate(q, zeta, 0.05)
 
 
