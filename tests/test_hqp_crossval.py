@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from uvms_qp.hqp import HierarchySolver, Status, available_solvers
+from uvms_qp.hqp.backends.nullspace import nullspace_solve
 from uvms_qp.hqp.problem import normalize_problem
 from uvms_qp.hqp.registry import get_spec
 
@@ -70,3 +71,27 @@ def test_weighted_metric_equals_weighted_pseudoinverse():
         for name in ("nullspace", "daqp", "cascade:quadprog"):
             x = HierarchySolver(name, W).solve([[(A, b)]]).x
             assert np.allclose(x, expected, atol=get_spec(name).agreement_tol * 10), name
+
+
+@pytest.mark.parametrize("weighted", [False, True])
+def test_nullspace_ignores_level_without_remaining_freedom(weighted):
+    """n = 10, levels [6, 3, 1, 4]: levels 1-3 fix x, so level 4 must contribute nothing.
+
+    The first three levels form a square regular system, so ``x = A_123^-1 b_123`` exactly
+    (independent of W); level 4 only gets a residual. A cut-off relative to the projected
+    block would invert the round-off left in it and return ``|x| ~ 1e15``.
+    """
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        levels = [[(rng.standard_normal((m, 10)), rng.standard_normal(m))] for m in (6, 3, 1, 4)]
+        W = rng.uniform(0.5, 10.0, 10) if weighted else None
+        A = np.vstack([lv[0][0] for lv in levels[:3]])
+        b = np.concatenate([lv[0][1] for lv in levels[:3]])
+        expected = np.linalg.solve(A, b)
+        result = HierarchySolver("nullspace", W).solve(levels)
+        tol = 1e-8 * max(1.0, np.abs(expected).max())
+        assert np.abs(result.x - expected).max() < tol
+        assert result.status is Status.LEVEL_INFEASIBLE and result.infeasible_level == 3
+        # the trusted entry (for the controller's hot path) gives the same numbers
+        x = nullspace_solve(normalize_problem(levels, weights=W))
+        assert np.abs(x - expected).max() < tol
