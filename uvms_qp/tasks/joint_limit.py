@@ -15,31 +15,60 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 
+#: Distance to a limit, as a fraction of the joint's range, below which the index is evaluated
+#: as if the joint were exactly that far (see :func:`joint_limit_index`).
+LIMIT_CLEARANCE = 1e-2
+
+
 def joint_limit_index(q: FloatArray, lower: FloatArray, upper: FloatArray,
-                      strength: FloatArray) -> tuple[float, FloatArray]:
-    r"""Joint-limit index and its gradient, ``003_229789978cc4b235.txt, Eq. (15)-(16)``.
+                      strength: FloatArray,
+                      clearance: float = LIMIT_CLEARANCE) -> tuple[float, FloatArray]:
+    r"""Joint-limit index and its gradient, ``003_229789978cc4b235.txt, Eq. (15)-(16)``, saturated.
 
     ``H(q) = sum_i (q_max,i - q_min,i)^2 / (C_i (q_max,i - q) (q - q_min,i))`` (dimensionless,
     minimum ``4 / C_i`` per joint at mid-range, infinite at a limit) and
     ``dH/dq_i = (q_max - q_min)^2 (2 q_i - q_max - q_min) / (C_i (q_max - q_i)^2 (q_i - q_min)^2)``
-    [1/rad]. Joints at a limit get their distances clipped to 1e-9 of the range (finite values).
+    [1/rad].
+
+    The exact index blows up at a limit (about ``1e17`` for a joint at its limit with the
+    distances merely kept positive), which no QP back-end can digest. Here both distances
+    ``q_max - q_i`` and ``q_i - q_min`` are clipped from below at ``eps_i = clearance (q_max,i -
+    q_min,i)``: the values are exact for every joint farther than ``eps_i`` from its limits; at,
+    or beyond, a limit the joint is evaluated as if it were ``eps_i`` inside. The gradient keeps
+    the sign of ``2 q_i - q_max - q_min`` (the direction of the exact Eq. (16), pointing away
+    from the middle of the range, also outside the limits) and is bounded by
+
+        |dH/dq_i| <= s_i / (C_i eps_i^2) = 1 / (C_i clearance^2 s_i),   s_i = q_max,i - q_min,i,
+
+    (``1e4 / (C_i s_i)`` [1/rad] with the default ``clearance = 1e-2``), and ``H`` by
+    ``1 / (C_i clearance (1 - clearance))`` per joint.
 
     Args:
         q: Joint angles [rad].
         lower: ``q_min`` [rad] (finite).
         upper: ``q_max`` [rad] (finite).
         strength: ``C_i`` (positive).
+        clearance: ``eps_i / s_i``, in (0, 0.5).
 
     Returns:
         ``(H, grad H)``.
     """
     span = upper - lower
-    tiny = 1e-9 * span
+    tiny = clearance * span
     a = np.maximum(upper - q, tiny)
     b = np.maximum(q - lower, tiny)
     H = float(np.sum(span * span / (strength * a * b)))
     grad = span * span * (2.0 * q - upper - lower) / (strength * a * a * b * b)
     return H, grad
+
+
+def joint_limit_gradient_bound(lower: FloatArray, upper: FloatArray, strength: FloatArray,
+                               clearance: float = LIMIT_CLEARANCE) -> FloatArray:
+    """Upper bound of ``|dH/dq_i|`` [1/rad] returned by :func:`joint_limit_index` at any ``q``.
+
+    ``1 / (C_i clearance^2 (q_max,i - q_min,i))`` (see :func:`joint_limit_index`).
+    """
+    return 1.0 / (strength * clearance * clearance * (upper - lower))
 
 
 class JointLimitTask(Task):
@@ -50,7 +79,10 @@ class JointLimitTask(Task):
     * ``"gradient"``: rows ``qdot_S = -lambda grad H`` (one per joint with finite limits,
       [rad/s]), the gradient-projection use of the index ``H`` of
       ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see :func:`joint_limit_index`); with
-      ``normalize=True`` the gradient is divided by its norm (Eq. (11)).
+      ``normalize=True`` the gradient is divided by its norm (Eq. (11)). Joints at (or beyond)
+      a limit, or closer to it than 1 % of their range, are evaluated as if 1 % inside, so the
+      rows stay finite and bounded (``|row_i| <= gain / (C_i 1e-4 (q_max,i - q_min,i))``) and
+      keep the direction of the exact gradient: they push the joint back toward mid-range.
     * ``"damping"``: rows ``qdot_S = 0`` whose per-row weights are
       ``weight (1 + |dH/dq_i|)``, the inverse of Eq. (17)'s ``w_i = 1 / (1 + |dH/dq_i|)``: in
       its level, joints close to a limit become expensive to move (Eq. (17) as a task; the
