@@ -354,9 +354,9 @@ def random_uvms_problem(seed: int, models: dict[str, Any] | None = None) -> Uvms
     else:
         pool.append(ManipulabilityTask(mode="ascend", gain=float(rng.uniform(0.1, 1.0))))
     if bounded:
-        # the gradient index of 003_229789978cc4b235.txt, Eq. (15) is infinite at a limit:
-        # joints drawn exactly at their limits get the margin (inequality) form
-        gradient = "at-limits" not in notes and rng.uniform() >= 0.6
+        # the gradient form (003_229789978cc4b235.txt, Eq. (15)-(16)) is saturated near the
+        # limits, so it is drawn for joints exactly at their limits too
+        gradient = rng.uniform() >= 0.6
         pool.append(JointLimitTask(mode="gradient" if gradient else "margin",
                                    margin=0.05, gain=2.0))
     pool.append(PayloadMomentTask(mode="bound" if rng.uniform() < 0.5 else "reduce",
