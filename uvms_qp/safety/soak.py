@@ -47,6 +47,10 @@ class SoakReport:
         p99_us: 99th percentile of the step time (all steps) [us].
         max_us: Largest step time [us].
         wall: Wall time of the run [s].
+        p10_first_us: 10th percentile of the step time, first cycle (less sensitive to other
+            load on the machine than the median) [us].
+        p10_last_us: Same for the last cycle [us].
+        degraded_examples: ``attempts`` of the first degraded steps (why the ladder went down).
     """
 
     steps: int = 0
@@ -61,6 +65,9 @@ class SoakReport:
     p99_us: float = 0.0
     max_us: float = 0.0
     wall: float = 0.0
+    p10_first_us: float = 0.0
+    p10_last_us: float = 0.0
+    degraded_examples: list[str] = field(default_factory=list)
 
     def lines(self) -> list[str]:
         """Readable report lines."""
@@ -75,7 +82,9 @@ class SoakReport:
             f"tracemalloc growth after warm-up: {self.memory_growth / 1024:.1f} KiB",
             f"step time median first cycle {self.median_first_us:.1f} us, last cycle "
             f"{self.median_last_us:.1f} us (drift {self.drift:+.1%}); p99 {self.p99_us:.1f} us, "
-            f"max {self.max_us / 1e3:.1f} ms",
+            f"max {self.max_us / 1e3:.1f} ms; 10th percentile first cycle "
+            f"{self.p10_first_us:.1f} us, last cycle {self.p10_last_us:.1f} us",
+            *(f"degraded step: {e}" for e in self.degraded_examples),
         ]
 
     @property
@@ -143,6 +152,9 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
         times[k] = res.step_time
         zeta = res.zeta
         report.stages[res.stage] += 1
+        if res.stage in ("decayed_previous", "zero", "hold_zero") and len(
+                report.degraded_examples) < 5:
+            report.degraded_examples.append(f"step {k}: {res.stage}: " + " | ".join(res.attempts))
         report.statuses[res.status.value] += 1
         unsafe = not np.all(np.isfinite(zeta)) or bool(
             np.any(zeta < res.lower) or np.any(zeta > res.upper))
@@ -174,6 +186,8 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
         last = times[a:b][clean[a:b]]
     report.median_first_us = float(np.median(first)) * 1e6 if first.size else 0.0
     report.median_last_us = float(np.median(last)) * 1e6 if last.size else 0.0
+    report.p10_first_us = float(np.percentile(first, 10)) * 1e6 if first.size else 0.0
+    report.p10_last_us = float(np.percentile(last, 10)) * 1e6 if last.size else 0.0
     report.p99_us = float(np.percentile(times, 99)) * 1e6
     report.max_us = float(times.max()) * 1e6
     return report
