@@ -1,8 +1,10 @@
 """Quantities recorded at every simulated state, measured independently of the controller.
 
 - Manipulability: the measure of the stack's manipulability task (``task.compute_value(state)``,
-  same frame and rows), otherwise Yoshikawa's measure of the arm's position Jacobian in the
-  arm-base frame, ``w = sqrt(det(J J^T))`` (``000_7b5f597fe4e36aa4.txt, Eq. (18)``).
+  same frame and rows), otherwise Yoshikawa's measure ``w = sqrt(det(J J^T))``
+  (``000_7b5f597fe4e36aa4.txt, Eq. (18)``) of the tool's arm Jacobian in the arm-base frame,
+  restricted to the rows a default :class:`~uvms_qp.tasks.ManipulabilityTask` uses (``x, y`` for
+  planar vehicles, whose ``z`` row is zero; ``x, y, z`` otherwise).
 - Payload moment: ``M = (x_E^2 + y_E^2) F`` with ``(x_E, y_E)`` the tool position in the arm-base
   frame [m] and ``F`` the payload force [N] currently set on the payload task
   (``003_229789978cc4b235.txt, Eq. (20)``; [N m^2] as in the paper), through the task's
@@ -19,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
+from ..tasks.manipulability import default_rows
 
 if TYPE_CHECKING:  # pragma: no cover
     from .scenario import Scenario
@@ -70,6 +73,7 @@ class Probes:
         elif scenario.current is not None:
             heading = scenario.current.heading
         self.heading = heading
+        self.manipulability_rows = default_rows(model)
         self.has_yaw = getattr(model, "vehicle_kind", "fixed") != "fixed"
         self.eta = np.zeros((size, int(model.eta_size)))
         self.joints = np.zeros((size, int(model.n_joints)))
@@ -97,7 +101,8 @@ class Probes:
         if self.manipulability_task is not None:
             self.manipulability[k] = float(self.manipulability_task.compute_value(state)[0])
         else:
-            self.manipulability[k] = yoshikawa(state.arm_jacobian("tool", rows="position"))
+            J = state.arm_jacobian("tool")[self.manipulability_rows]
+            self.manipulability[k] = yoshikawa(J)
         if self.payload_moment is not None:
             self.payload_moment[k] = float(self.payload_task.compute_value(state)[0])
 

@@ -176,6 +176,20 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
     return w, np.array(_general_gradient(cols, P6.T.tolist()))
 
 
+def default_axes(model: Model) -> list[str]:
+    """Twist rows measured by default: ``x, y`` for planar vehicles, else ``x, y, z``.
+
+    A planar model's arm moves in the horizontal plane, so its ``z`` row is zero and the measure
+    of the three position rows would always be 0.
+    """
+    return ["x", "y"] if model.vehicle_kind == "planar" else ["x", "y", "z"]
+
+
+def default_rows(model: Model) -> list[int]:
+    """Indices into the twist ``[v; w]`` of :func:`default_axes`."""
+    return [TWIST_AXES.index(a) for a in default_axes(model)]
+
+
 def shaping_function(w: float, threshold: float) -> float:
     r"""Shaping function ``k(w)`` blending station keeping and singularity avoidance.
 
@@ -282,10 +296,7 @@ class ManipulabilityTask(Task):
         check_frame(model, self.frame, f"{self.name}.frame")
         if model.n_joints == 0:
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
-        if self._axes_arg is not None:
-            axes = self._axes_arg
-        else:
-            axes = ["x", "y"] if model.vehicle_kind == "planar" else ["x", "y", "z"]
+        axes = self._axes_arg if self._axes_arg is not None else default_axes(model)
         self.axes = list(axes)
         self._sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
         self._rows = None if self._sel.tolist() == [0, 1, 2] else self._sel.tolist()
