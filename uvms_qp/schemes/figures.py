@@ -14,27 +14,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..sim._figures import output_dir, pyplot, save
+
 if TYPE_CHECKING:  # pragma: no cover
     from .comparison import Comparison
 
 #: Number of configuration snapshots drawn per scheme for planar models.
 SNAPSHOTS = 7
-
-
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig: Any, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    _pyplot().close(fig)
-    return path
 
 
 def _labels(model: Any) -> list[str]:
@@ -53,9 +39,8 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
         model: The scenario's model (for labels, frames and joint limits).
         out_dir: Output directory (created if needed).
     """
-    plt = _pyplot()
-    directory = Path(out_dir)
-    directory.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
+    directory = output_dir(out_dir)
     runs = comparison.runs
     paths: list[Path] = []
     title = comparison.scenario
@@ -70,7 +55,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
         np.atleast_1d(axes)[0].set_title(f"{title}: vehicle pose")
         np.atleast_1d(axes)[0].legend(fontsize=7)
         np.atleast_1d(axes)[-1].set_xlabel("t [s]")
-        paths.append(_save(fig, directory / "vehicle_pose.png"))
+        paths.append(save(fig, directory / "vehicle_pose.png"))
 
         nveh = int(model.n_vehicle)
         fig, axes = plt.subplots(nveh, 1, figsize=(7, 1.8 * nveh), sharex=True)
@@ -82,7 +67,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
         np.atleast_1d(axes)[0].set_title(f"{title}: vehicle body rates")
         np.atleast_1d(axes)[0].legend(fontsize=7)
         np.atleast_1d(axes)[-1].set_xlabel("t [s]")
-        paths.append(_save(fig, directory / "vehicle_rates.png"))
+        paths.append(save(fig, directory / "vehicle_rates.png"))
 
     n = int(model.n_joints)
     fig, axes = plt.subplots(n, 1, figsize=(7, 1.6 * n), sharex=True)
@@ -99,7 +84,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
     np.atleast_1d(axes)[0].set_title(f"{title}: joints (dashed: limits)")
     np.atleast_1d(axes)[0].legend(fontsize=7)
     np.atleast_1d(axes)[-1].set_xlabel("t [s]")
-    paths.append(_save(fig, directory / "joints.png"))
+    paths.append(save(fig, directory / "joints.png"))
 
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     for run in runs:
@@ -113,7 +98,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
     ax2.set_ylabel("tool error [m]")
     ax2.set_yscale("symlog", linthresh=1e-4)
     ax2.set_xlabel("t [s]")
-    paths.append(_save(fig, directory / "manipulability_tracking.png"))
+    paths.append(save(fig, directory / "manipulability_tracking.png"))
 
     keys = sorted({key for run in runs for key in run.info if key != "manipulability"})
     if keys:
@@ -127,7 +112,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
         axes[0, 0].set_title(f"{title}: scheme diagnostics")
         axes[0, 0].legend(fontsize=7)
         axes[-1, 0].set_xlabel("t [s]")
-        paths.append(_save(fig, directory / "scheme_diagnostics.png"))
+        paths.append(save(fig, directory / "scheme_diagnostics.png"))
 
     if model.vehicle_kind in ("planar", "spatial"):
         paths.append(_snapshots(plt, comparison, model, directory / "configurations.png"))
@@ -170,4 +155,4 @@ def _snapshots(plt: Any, comparison: Comparison, model: Any, path: Path) -> Path
             ax.invert_yaxis()
         ax.set_aspect("equal")
     fig.suptitle(f"{comparison.scenario}: configurations (vehicle red, arm blue, later darker)")
-    return _save(fig, path)
+    return save(fig, path)

@@ -14,24 +14,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._figures import output_dir, pyplot, save
+
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
-
-
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig: Any, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    _pyplot().close(fig)
-    return path
 
 
 def _events(ax: Any, result: SimulationResult) -> None:
@@ -41,9 +27,8 @@ def _events(ax: Any, result: SimulationResult) -> None:
 
 def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     """Write the figures of ``result`` into ``out_dir``; return their paths."""
-    plt = _pyplot()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
+    out = output_dir(out_dir)
     t = result.time_states
     ts = result.time
     files: list[Path] = []
@@ -60,7 +45,7 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     axes[3].set_ylabel("|error| [m]")
     axes[3].set_xlabel("t [s]")
     fig.suptitle(f"{result.scenario}: tool tracking (world NED)")
-    files.append(_save(fig, out / "tool_tracking.png"))
+    files.append(save(fig, out / "tool_tracking.png"))
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for i, label in enumerate("xyz"):
@@ -78,7 +63,7 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     for ax in axes:
         _events(ax, result)
     fig.suptitle(f"{result.scenario}: vehicle pose")
-    files.append(_save(fig, out / "vehicle_pose.png"))
+    files.append(save(fig, out / "vehicle_pose.png"))
 
     n = result.joints.shape[1]
     fig, axes = plt.subplots(max(n, 1), 1, figsize=(8, 1.8 * max(n, 1) + 1), sharex=True,
@@ -91,7 +76,7 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
         ax.set_ylabel(f"{result.joint_names[j]} [rad]")
     axes[-1, 0].set_xlabel("t [s]")
     fig.suptitle(f"{result.scenario}: joints and limits")
-    files.append(_save(fig, out / "joints.png"))
+    files.append(save(fig, out / "joints.png"))
 
     fig, ax = plt.subplots(figsize=(8, 3.5))
     ax.plot(t, result.manipulability)
@@ -99,7 +84,7 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     ax.set_xlabel("t [s]")
     _events(ax, result)
     fig.suptitle(f"{result.scenario}: manipulability")
-    files.append(_save(fig, out / "manipulability.png"))
+    files.append(save(fig, out / "manipulability.png"))
 
     nv = result.zeta.shape[1]
     cols = 2
@@ -116,7 +101,7 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     for i in range(nv, rows * cols):
         axes[i // cols, i % cols].axis("off")
     fig.suptitle(f"{result.scenario}: commanded rates and hard bounds [m/s, rad/s]")
-    files.append(_save(fig, out / "rates.png"))
+    files.append(save(fig, out / "rates.png"))
 
     fig, ax = plt.subplots(figsize=(9, 4))
     for level in range(result.level_residuals.shape[1]):
@@ -132,7 +117,7 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
         ax.legend(loc="best", fontsize="small")
     _events(ax, result)
     fig.suptitle(f"{result.scenario}: per-level residuals")
-    files.append(_save(fig, out / "residuals.png"))
+    files.append(save(fig, out / "residuals.png"))
 
     if result.payload_moment is not None:
         fig, ax = plt.subplots(figsize=(8, 3.5))
@@ -141,5 +126,5 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
         ax.set_xlabel("t [s]")
         _events(ax, result)
         fig.suptitle(f"{result.scenario}: payload moment (x_E^2 + y_E^2) F")
-        files.append(_save(fig, out / "payload_moment.png"))
+        files.append(save(fig, out / "payload_moment.png"))
     return files
