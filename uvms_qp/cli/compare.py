@@ -12,24 +12,23 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from ._common import scenario_command
 
-def register(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``compare`` sub-command to the ``uvms-qp`` parser."""
-    parser: argparse.ArgumentParser = subparsers.add_parser(
-        "compare",
-        help="run a scenario under each scheme it names: results.json per scheme + table",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    parser.add_argument("scenario", help="scenario file (.toml) or bundled scenario name")
-    parser.add_argument("--out", required=True, help="output directory")
+
+def _options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--schemes", help="comma-separated subset of the scenario's schemes (default: all)"
     )
-    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar, no table")
-    parser.set_defaults(func=run)
-    return parser
+
+
+def register(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``compare`` sub-command to the ``uvms-qp`` parser."""
+    return scenario_command(
+        subparsers, "compare",
+        help="run a scenario under each scheme it names: results.json per scheme + table",
+        description=__doc__, func=run, quiet_help="no progress bar, no table",
+        options=_options,
+    )
 
 
 def _print_table(comparison: Any) -> None:

@@ -12,23 +12,22 @@ import argparse
 import sys
 from typing import Any
 
+from ._common import scenario_command
+
+
+def _options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--solver", help="override the scenario's solver (e.g. cascade:osqp)")
+    parser.add_argument("--duration", type=float, help="override the simulated time [s]")
+
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``run`` sub-command to the ``uvms-qp`` parser."""
-    parser: argparse.ArgumentParser = subparsers.add_parser(
-        "run",
+    return scenario_command(
+        subparsers, "run",
         help="run a scenario (bundled name or TOML file): results.json + figures",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=__doc__, func=run, quiet_help="no progress bar, no summary",
+        options=_options,
     )
-    parser.add_argument("scenario", help="scenario file (.toml) or bundled scenario name")
-    parser.add_argument("--out", required=True, help="output directory")
-    parser.add_argument("--solver", help="override the scenario's solver (e.g. cascade:osqp)")
-    parser.add_argument("--duration", type=float, help="override the simulated time [s]")
-    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
-    parser.set_defaults(func=run)
-    return parser
 
 
 def _summary(metrics: dict[str, Any]) -> str:
