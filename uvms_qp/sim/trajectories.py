@@ -20,7 +20,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -198,38 +198,38 @@ class SegmentTrajectory(Trajectory):
         return TrajectorySample(position, velocity, R, omega)
 
 
-class QuinticTrajectory(SegmentTrajectory):
+class _FixedProfileSegment(SegmentTrajectory):
+    """A :class:`SegmentTrajectory` whose time scaling is set by the class (``_profile``).
+
+    Its constructor has no ``profile`` argument, so a scenario cannot contradict the type.
+    """
+
+    _profile: ClassVar[Profile] = "quintic"
+
+    def __init__(
+        self,
+        start: Sequence[float],
+        goal: Sequence[float],
+        duration: float,
+        start_rotation: Any = None,
+        goal_rotation: Any = None,
+        start_time: float = 0.0,
+    ) -> None:
+        super().__init__(
+            start, goal, duration, start_rotation, goal_rotation, start_time, self._profile
+        )
+
+
+class QuinticTrajectory(_FixedProfileSegment):
     """Point-to-point motion along a straight line with a quintic, rest-to-rest time scaling."""
 
-    def __init__(
-        self,
-        start: Sequence[float],
-        goal: Sequence[float],
-        duration: float,
-        start_rotation: Any = None,
-        goal_rotation: Any = None,
-        start_time: float = 0.0,
-    ) -> None:
-        super().__init__(
-            start, goal, duration, start_rotation, goal_rotation, start_time, "quintic"
-        )
+    _profile = "quintic"
 
 
-class LineTrajectory(SegmentTrajectory):
+class LineTrajectory(_FixedProfileSegment):
     """Straight line at constant speed (as in the straight-line runs of paper 002, Section 4)."""
 
-    def __init__(
-        self,
-        start: Sequence[float],
-        goal: Sequence[float],
-        duration: float,
-        start_rotation: Any = None,
-        goal_rotation: Any = None,
-        start_time: float = 0.0,
-    ) -> None:
-        super().__init__(
-            start, goal, duration, start_rotation, goal_rotation, start_time, "linear"
-        )
+    _profile = "linear"
 
 
 class CircleTrajectory(Trajectory):
