@@ -18,20 +18,10 @@ import time
 
 import numpy as np
 
-from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
+from uvms_qp.bench.stacks import demo_stack, tool_posture_stack
 from uvms_qp.controller import Controller
 from uvms_qp.model import load_model
-from uvms_qp.stack import Level, Stack
-from uvms_qp.tasks import (
-    CurrentAlignmentTask,
-    EndEffectorTask,
-    JointLimitTask,
-    ManipulabilityTask,
-    PayloadMomentTask,
-    PostureTask,
-    StationKeepingTask,
-    VehicleMotionTask,
-)
+from uvms_qp.tasks import EndEffectorTask
 
 DT = 0.05
 
@@ -66,28 +56,12 @@ def stats(samples):
 
 def small_stack(traj):
     """The content of the Pink problem: tool position + posture in one level, same limits."""
-    return Stack(
-        levels=[Level(EndEffectorTask(trajectory=traj, gain=2.0),
-                      PostureTask(gain=0.1, weight=1e-3))],
-        constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds(),
-                     VehicleRateBounds(linear=0.5, angular=0.3)],
-    )
+    return tool_posture_stack(EndEffectorTask(trajectory=traj, gain=2.0))
 
 
 def ours_stepper(model, q0, traj, solver, stack=None):
     """One-tick closure for our controller (state update + step), integrating its own q."""
-    stack = stack or Stack(
-        levels=[
-            Level(EndEffectorTask(trajectory=traj, gain=2.0)),                       # [1/s]
-            Level(ManipulabilityTask(mode="floor", minimum=0.002, gain=2.0),
-                  JointLimitTask(mode="margin", margin=0.1, gain=2.0)),
-            Level(PayloadMomentTask(force=10.0, gain=0.5), StationKeepingTask(gain=1.0),
-                  CurrentAlignmentTask(heading=0.78, gain=0.5)),                     # [rad]
-            Level(VehicleMotionTask(beta=0.8), PostureTask(gain=0.2)),
-        ],
-        constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds(),
-                     VehicleRateBounds(linear=0.5, angular=0.3)],
-    )
+    stack = stack or demo_stack(trajectory=traj)
     ctrl = Controller(model, stack, solver=solver, dt=DT)
     box = {"q": q0.copy(), "statuses": {}}
 

@@ -13,25 +13,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from uvms_qp.constraints import (
-    JointPositionBounds,
-    JointVelocityBounds,
-    LinearInequality,
-    VehicleRateBounds,
-)
+from uvms_qp.bench.stacks import random_bounds, random_stack
 from uvms_qp.controller import Controller
 from uvms_qp.model import load_model
-from uvms_qp.stack import Level, Stack
-from uvms_qp.tasks import (
-    CurrentAlignmentTask,
-    EndEffectorTask,
-    JointLimitTask,
-    ManipulabilityTask,
-    PayloadMomentTask,
-    PostureTask,
-    StationKeepingTask,
-    VehicleMotionTask,
-)
+from uvms_qp.stack import Stack
 
 MODELS = {name: load_model(name) for name in
           ("bluerov2_heavy_alpha5", "wang_9dof", "soylu_planar")}
@@ -39,43 +24,10 @@ SOLVERS = ["daqp", "cascade:quadprog", "cascade:piqp"]
 
 
 def random_problem(model, rng):
-    """A random state and a random 3-4 level stack with all hard bounds."""
-    q = model.random_configuration(rng)
-    state = model.state(q)
-    p_tool = state.position("tool")
-    target = p_tool + rng.normal(scale=0.3, size=3)
-    if model.vehicle_kind == "planar":
-        target[2] = p_tool[2]
-    mode = "position"
-    ee_kwargs = {"position": target}
-    if model.vehicle_kind == "spatial" and rng.uniform() < 0.5:
-        mode = "pose"
-        ee_kwargs["rotation"] = model.frame_pose(model.random_configuration(rng), "tool")[:3, :3]
-    levels = [Level(EndEffectorTask(mode=mode, gain=float(rng.uniform(0.5, 3)), **ee_kwargs))]
-    w0 = ManipulabilityTask(mode="ascend").bind(model).compute_value(state)[0]
-    second = [ManipulabilityTask(mode="floor", minimum=float(w0 * rng.uniform(0.5, 1.5)),
-                                 gain=float(rng.uniform(1, 10)))]
-    if np.isfinite(model.joint_lower).all():
-        second.append(JointLimitTask(mode="margin", margin=0.05, gain=2.0))
-    if rng.uniform() < 0.5:
-        second.append(PayloadMomentTask(mode="bound", force=20.0,
-                                        maximum=float(rng.uniform(0.0, 2.0)), gain=2.0))
-    levels.append(Level(*second))
-    third = [PayloadMomentTask(force=float(rng.uniform(0, 30)), gain=0.2, name="payload_reduce")]
-    if model.vehicle_kind != "fixed":
-        third += [StationKeepingTask(gain=1.0, weight=float(rng.uniform(0.5, 2))),
-                  CurrentAlignmentTask(heading=float(rng.uniform(-3, 3)))]
-    levels.append(Level(*third))
-    if rng.uniform() < 0.7:
-        levels.append(Level(VehicleMotionTask(beta=float(rng.uniform(0.2, 0.9))),
-                            PostureTask(gain=0.5)))
-    constraints = [JointPositionBounds(gain=float(rng.uniform(0.2, 1.0))),
-                   JointVelocityBounds(limits=list(rng.uniform(0.3, 1.0, model.n_joints))),
-                   VehicleRateBounds(limits=list(rng.uniform(0.1, 0.6, model.n_vehicle)))]
-    if rng.uniform() < 0.5:
-        constraints.append(LinearInequality(A=[list(rng.normal(size=model.nv))],
-                                            lower=[-0.2], upper=[0.3]))
-    return state, Stack(levels=levels, constraints=constraints)
+    """A random state and a random 2-6 level stack under random hard bounds (the benchmark's
+    random-set draw, :func:`uvms_qp.bench.stacks.random_stack`)."""
+    state = model.state(model.random_configuration(rng))
+    return state, random_stack(model, state, rng, random_bounds(model, rng))
 
 
 def check_draw(model, seed, solver):

@@ -239,13 +239,6 @@ def _at_limits_configuration(model: Any, rng: np.random.Generator) -> FloatArray
     return model.configuration(eta, joints)
 
 
-def _target_near(state: Any, model: Any, rng: np.random.Generator, scale: float) -> FloatArray:
-    p = state.position("tool") + rng.normal(scale=scale, size=3)
-    if model.vehicle_kind == "planar":
-        p[2] = state.position("tool")[2]
-    return p
-
-
 def _fully_actuated(model: Any) -> bool:
     return int(model.nv) == int(model.pin_model.nv)
 
@@ -259,28 +252,14 @@ def random_uvms_problem(seed: int, models: dict[str, Any] | None = None) -> Uvms
 
     Returns:
         A :class:`UvmsDraw` whose stack has 2-6 levels mixing equality and inequality tasks
-        (or, one draw in five on a fully actuated model, one weighted level Pink can express),
-        and hard joint position, joint rate and vehicle rate bounds tight enough to be active.
+        (:func:`~uvms_qp.bench.stacks.random_stack`; or, one draw in five on a fully actuated
+        model, one weighted level Pink can express), and hard joint position, joint rate and
+        vehicle rate bounds tight enough to be active
+        (:func:`~uvms_qp.bench.stacks.random_bounds`).
     """
-    from ..constraints import (
-        JointPositionBounds,
-        JointVelocityBounds,
-        LinearInequality,
-        VehicleRateBounds,
-    )
     from ..model import bundled_models, load_model
-    from ..stack import Level, Stack
-    from ..tasks import (
-        CurrentAlignmentTask,
-        EndEffectorTask,
-        JointLimitTask,
-        ManipulabilityTask,
-        PayloadMomentTask,
-        PostureTask,
-        StationKeepingTask,
-        VehicleAttitudeTask,
-        VehicleMotionTask,
-    )
+    from ..tasks import EndEffectorTask
+    from .stacks import random_bounds, random_stack, random_target, tool_posture_stack
 
     rng = np.random.default_rng([seed, 0x55])
     cache = models if models is not None else {}
@@ -305,21 +284,13 @@ def random_uvms_problem(seed: int, models: dict[str, Any] | None = None) -> Uvms
         q = model.random_configuration(rng)
     state = model.state(q)
     dt = float(rng.choice([0.01, 0.05, 0.1]))
-    vehicle = model.vehicle_kind != "fixed"
-    bounded = bool(np.isfinite(model.joint_lower).all() and np.isfinite(model.joint_upper).all())
-    constraints: list[Any] = [
-        JointVelocityBounds(limits=list(rng.uniform(0.2, 1.0, model.n_joints))),
-    ]
-    if bounded:
-        constraints.append(JointPositionBounds(gain=float(rng.uniform(0.3, 1.0))))
-    if vehicle:
-        constraints.append(VehicleRateBounds(limits=list(rng.uniform(0.05, 0.5, model.n_vehicle))))
+    constraints = random_bounds(model, rng)
 
     if _fully_actuated(model) and rng.uniform() < 0.2:
         # one weighted level: tool frame + posture regularisation (expressible in Pink)
         mode: Literal["position", "pose"] = (
             "pose" if model.vehicle_kind == "spatial" and rng.uniform() < 0.5 else "position")
-        target = _target_near(state, model, rng, 0.3)
+        target = random_target(state, model, rng, 0.3)
         rotation = None
         if mode == "pose":
             rotation = model.frame_pose(model.random_configuration(rng), "tool")[:3, :3]
@@ -328,61 +299,16 @@ def random_uvms_problem(seed: int, models: dict[str, Any] | None = None) -> Uvms
         kwargs: dict[str, Any] = {"position": list(target)}
         if rotation is not None:
             kwargs["rotation"] = rotation.tolist()
-        stack = Stack(levels=[Level(EndEffectorTask(mode=mode, gain=gain, **kwargs),
-                                    PostureTask(gain=1.0, weight=posture_weight))],
-                      constraints=constraints)
+        stack = tool_posture_stack(EndEffectorTask(mode=mode, gain=gain, **kwargs),
+                                   posture_gain=1.0, posture_weight=posture_weight,
+                                   constraints=constraints)
         pink = {"position": target, "rotation": rotation, "gain": gain,
                 "posture_weight": posture_weight}
         notes.append("one-level")
         return UvmsDraw(model, q, stack, dt, pink, tuple(notes))
 
-    # main task: the tool, then a random mix of mission tasks spread over 1-5 more levels
-    ee_kwargs: dict[str, Any] = {"position": list(_target_near(state, model, rng, 0.3))}
-    mode = "position"
-    if model.vehicle_kind == "spatial" and rng.uniform() < 0.4:
-        mode = "pose"
-        ee_kwargs["rotation"] = model.frame_pose(model.random_configuration(rng),
-                                                 "tool")[:3, :3].tolist()
-    pool: list[Any] = [EndEffectorTask(mode=mode, gain=float(rng.uniform(0.5, 3.0)),
-                                       **ee_kwargs)]
-    probe = ManipulabilityTask(mode="ascend")
-    probe.bind(model)
-    w0 = float(probe.compute_value(state)[0])
-    if rng.uniform() < 0.5:
-        pool.append(ManipulabilityTask(mode="floor", minimum=w0 * float(rng.uniform(0.5, 1.5)),
-                                       gain=float(rng.uniform(1.0, 10.0))))
-    else:
-        pool.append(ManipulabilityTask(mode="ascend", gain=float(rng.uniform(0.1, 1.0))))
-    if bounded:
-        # the gradient form (003_229789978cc4b235.txt, Eq. (15)-(16)) is saturated near the
-        # limits, so it is drawn for joints exactly at their limits too
-        gradient = rng.uniform() >= 0.6
-        pool.append(JointLimitTask(mode="gradient" if gradient else "margin",
-                                   margin=0.05, gain=2.0))
-    pool.append(PayloadMomentTask(mode="bound" if rng.uniform() < 0.5 else "reduce",
-                                  force=float(rng.uniform(5.0, 30.0)),
-                                  maximum=float(rng.uniform(0.0, 2.0)), gain=1.0))
-    if vehicle:
-        pool.append(StationKeepingTask(gain=1.0, weight=float(rng.uniform(0.5, 2.0))))
-        if "r" in model.actuated:
-            pool.append(CurrentAlignmentTask(heading=float(rng.uniform(-3.0, 3.0))))
-        if "p" in model.actuated and "q" in model.actuated:
-            pool.append(VehicleAttitudeTask(gain=1.0))
-        pool.append(VehicleMotionTask(beta=float(rng.uniform(0.2, 0.9))))
-    pool.append(PostureTask(gain=0.5))
-    n_levels = int(rng.integers(2, 7))
-    rest = pool[1:]
-    rng.shuffle(rest)
-    n_levels = min(n_levels, 1 + len(rest))
-    groups: list[list[Any]] = [[pool[0]]] + [[] for _ in range(n_levels - 1)]
-    for i, task in enumerate(rest):
-        k = 1 + i if i < n_levels - 1 else int(rng.integers(0, n_levels))
-        groups[k].append(task)
-    if rng.uniform() < 0.4:
-        constraints.append(LinearInequality(A=[list(rng.normal(size=model.nv))],
-                                            lower=[-0.2], upper=[0.3]))
-    stack = Stack(levels=[Level(*g) for g in groups], constraints=constraints)
-    notes.append(f"{n_levels}-levels")
+    stack = random_stack(model, state, rng, constraints)
+    notes.append(f"{len(stack.levels)}-levels")
     return UvmsDraw(model, q, stack, dt, None, tuple(notes))
 
 
