@@ -18,17 +18,33 @@ from typing import Any, Literal
 import numpy as np
 
 from .._validation import FloatArray
+from ..constraints import (
+    JointPositionBounds,
+    JointVelocityBounds,
+    LinearInequality,
+    VehicleRateBounds,
+)
+from ..stack import Level, Stack
+from ..tasks import (
+    CurrentAlignmentTask,
+    EndEffectorTask,
+    JointLimitTask,
+    ManipulabilityTask,
+    PayloadMomentTask,
+    PostureTask,
+    StationKeepingTask,
+    VehicleAttitudeTask,
+    VehicleMotionTask,
+)
 
 
 def _standard_bounds() -> list[Any]:
     """Joint position (gain 0.5), joint rate (model limits) and vehicle rate bounds."""
-    from ..constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
-
     return [JointPositionBounds(gain=0.5), JointVelocityBounds(),
             VehicleRateBounds(linear=0.5, angular=0.3)]  # [m/s], [rad/s]
 
 
-def demo_stack(*, trajectory: Any = None, position: list[float] | None = None) -> Any:
+def demo_stack(*, trajectory: Any = None, position: list[float] | None = None) -> Stack:
     """The four-level demo stack for a vehicle-manipulator (e.g. ``bluerov2_heavy_alpha5``).
 
     Levels, highest first: the tool position (gain 2 [1/s]) following ``trajectory`` or held at
@@ -44,18 +60,6 @@ def demo_stack(*, trajectory: Any = None, position: list[float] | None = None) -
     Returns:
         A new :class:`~uvms_qp.stack.Stack` (fresh task objects on every call).
     """
-    from ..stack import Level, Stack
-    from ..tasks import (
-        CurrentAlignmentTask,
-        EndEffectorTask,
-        JointLimitTask,
-        ManipulabilityTask,
-        PayloadMomentTask,
-        PostureTask,
-        StationKeepingTask,
-        VehicleMotionTask,
-    )
-
     tool = (EndEffectorTask(trajectory=trajectory, gain=2.0) if trajectory is not None
             else EndEffectorTask(position=position, gain=2.0))
     return Stack(
@@ -72,7 +76,7 @@ def demo_stack(*, trajectory: Any = None, position: list[float] | None = None) -
 
 
 def tool_posture_stack(tool: Any, *, posture_gain: float = 0.1, posture_weight: float = 1e-3,
-                       constraints: list[Any] | None = None) -> Any:
+                       constraints: list[Any] | None = None) -> Stack:
     """One weighted level: the ``tool`` task plus a posture task of weight ``posture_weight``.
 
     Args:
@@ -81,9 +85,6 @@ def tool_posture_stack(tool: Any, *, posture_gain: float = 0.1, posture_weight: 
         posture_weight: Posture weight relative to the tool task.
         constraints: Hard constraints (default: those of :func:`demo_stack`).
     """
-    from ..stack import Level, Stack
-    from ..tasks import PostureTask
-
     return Stack(levels=[Level(tool, PostureTask(gain=posture_gain, weight=posture_weight))],
                  constraints=_standard_bounds() if constraints is None else constraints)
 
@@ -105,8 +106,6 @@ def random_bounds(model: Any, rng: np.random.Generator) -> list[Any]:
     Joint rates 0.2-1 rad/s; joint positions with gain 0.3-1 (when every joint has finite
     limits); vehicle rates 0.05-0.5 m/s or rad/s (when there is a vehicle).
     """
-    from ..constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
-
     bounded = bool(np.isfinite(model.joint_lower).all() and np.isfinite(model.joint_upper).all())
     constraints: list[Any] = [
         JointVelocityBounds(limits=list(rng.uniform(0.2, 1.0, model.n_joints))),
@@ -119,7 +118,7 @@ def random_bounds(model: Any, rng: np.random.Generator) -> list[Any]:
 
 
 def random_stack(model: Any, state: Any, rng: np.random.Generator,
-                 constraints: list[Any]) -> Any:
+                 constraints: list[Any]) -> Stack:
     """A random mission stack: the tool task first in level 1, then 1-5 levels of mixed tasks.
 
     The tool task (position, or pose on spatial vehicles 40 % of the time) tracks a target about
@@ -140,20 +139,6 @@ def random_stack(model: Any, state: Any, rng: np.random.Generator,
     Returns:
         A new :class:`~uvms_qp.stack.Stack` of 2-6 levels.
     """
-    from ..constraints import LinearInequality
-    from ..stack import Level, Stack
-    from ..tasks import (
-        CurrentAlignmentTask,
-        EndEffectorTask,
-        JointLimitTask,
-        ManipulabilityTask,
-        PayloadMomentTask,
-        PostureTask,
-        StationKeepingTask,
-        VehicleAttitudeTask,
-        VehicleMotionTask,
-    )
-
     bounded = bool(np.isfinite(model.joint_lower).all() and np.isfinite(model.joint_upper).all())
     vehicle = model.vehicle_kind != "fixed"
     ee_kwargs: dict[str, Any] = {"position": list(random_target(state, model, rng, 0.3))}
