@@ -15,8 +15,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 
-#: Distance to a limit, as a fraction of the joint's range, below which the index is evaluated
-#: as if the joint were exactly that far (see :func:`joint_limit_index`).
+#: Distance to a limit, as a fraction of the joint's range, below which the distance counts as
+#: exactly that much in the index and its gradient (see :func:`joint_limit_index`).
 LIMIT_CLEARANCE = 1e-2
 
 
@@ -33,10 +33,12 @@ def joint_limit_index(q: FloatArray, lower: FloatArray, upper: FloatArray,
     The exact index blows up at a limit (about ``1e17`` for a joint at its limit with the
     distances merely kept positive), which no QP back-end can digest. Here both distances
     ``q_max - q_i`` and ``q_i - q_min`` are clipped from below at ``eps_i = clearance (q_max,i -
-    q_min,i)``: the values are exact for every joint farther than ``eps_i`` from its limits; at,
-    or beyond, a limit the joint is evaluated as if it were ``eps_i`` inside. The gradient keeps
-    the sign of ``2 q_i - q_max - q_min`` (the direction of the exact Eq. (16), pointing away
-    from the middle of the range, also outside the limits) and is bounded by
+    q_min,i)`` in both formulas: the values are exact for every joint farther than ``eps_i``
+    from its limits; closer, at or beyond a limit, the distance to that limit counts as
+    ``eps_i`` (the returned gradient is then Eq. (16) with clipped distances, a saturation, not
+    the derivative of the clipped ``H``). The gradient keeps the sign of
+    ``2 q_i - q_max - q_min`` (the direction of the exact Eq. (16), pointing away from the
+    middle of the range, also outside the limits) and is bounded by
 
         |dH/dq_i| <= s_i / (C_i eps_i^2) = 1 / (C_i clearance^2 s_i),   s_i = q_max,i - q_min,i,
 
@@ -79,10 +81,11 @@ class JointLimitTask(Task):
     * ``"gradient"``: rows ``qdot_S = -lambda grad H`` (one per joint with finite limits,
       [rad/s]), the gradient-projection use of the index ``H`` of
       ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see :func:`joint_limit_index`); with
-      ``normalize=True`` the gradient is divided by its norm (Eq. (11)). Joints at (or beyond)
-      a limit, or closer to it than 1 % of their range, are evaluated as if 1 % inside, so the
-      rows stay finite and bounded (``|row_i| <= gain / (C_i 1e-4 (q_max,i - q_min,i))``) and
-      keep the direction of the exact gradient: they push the joint back toward mid-range.
+      ``normalize=True`` the gradient is divided by its norm (Eq. (11)). For joints at (or
+      beyond) a limit, or closer to it than 1 % of their range, the distance to that limit
+      counts as 1 % of the range, so the rows stay finite and bounded
+      (``|row_i| <= gain / (C_i 1e-4 (q_max,i - q_min,i))``) and keep the direction of the
+      exact gradient: they push the joint back toward mid-range.
     * ``"damping"``: rows ``qdot_S = 0`` whose per-row weights are
       ``weight (1 + |dH/dq_i|)``, the inverse of Eq. (17)'s ``w_i = 1 / (1 + |dH/dq_i|)``: in
       its level, joints close to a limit become expensive to move (Eq. (17) as a task; the
