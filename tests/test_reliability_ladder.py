@@ -255,9 +255,9 @@ def test_alternates_and_construction_errors():
 
 
 def test_deadline_bounds_a_slow_cascade():
-    """ProxQP's cascade needs ~18 s on this badly scaled regression problem (gain 1e9) without
-    limits; with a 50 ms deadline the step ends within one QP of the deadline, degraded and
-    flagged."""
+    """ProxQP's cascade needed ~18 s on this badly scaled regression problem (gain 1e9) without
+    limits; with a 50 ms deadline the step ends within one QP of the deadline, flagged: either
+    late but verified (used), or degraded with the solver stages skipped."""
     import sys
     from pathlib import Path
 
@@ -269,5 +269,6 @@ def test_deadline_bounds_a_slow_cascade():
     start = time.perf_counter()
     out = safe.solve(problem)
     assert time.perf_counter() - start < 3.0
-    assert out.deadline_missed and any("deadline passed" in a for a in out.attempts)
+    assert out.deadline_missed
+    assert out.stage == "primary" or any("deadline passed" in a for a in out.attempts)
     assert _safe(problem, out.x, 1e-9 * problem.hard_scale).ok
