@@ -8,6 +8,8 @@ measured at ``x`` (never trusted from the back-end), each level's weighted resid
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .._validation import FloatArray
@@ -207,6 +209,17 @@ def evaluate_stacked(
 
 def hard_feasible(problem: Problem) -> bool:
     """Independent feasibility check of the hard box and rows (HiGHS LP through SciPy)."""
+    return _hard_lp(problem).status != 2
+
+
+def hard_point(problem: Problem) -> FloatArray | None:
+    """A point of the hard set (a vertex from HiGHS' LP through SciPy), or None if none found."""
+    res = _hard_lp(problem)
+    return np.asarray(res.x, dtype=np.float64) if res.status == 0 and res.x is not None else None
+
+
+def _hard_lp(problem: Problem) -> Any:
+    """``linprog`` of the zero objective over the hard box and rows."""
     from scipy.optimize import linprog
 
     hard = problem.hard
@@ -225,7 +238,6 @@ def hard_feasible(problem: Problem) -> bool:
             A_eq, b_eq = hard.A[hard.eq], hard.lo[hard.eq]
     bounds = [(None if not np.isfinite(lo) else lo, None if not np.isfinite(hi) else hi)
               for lo, hi in zip(problem.lower, problem.upper, strict=True)]
-    res = linprog(np.zeros(problem.n), A_ub=np.vstack(A_ub) if A_ub else None,
-                  b_ub=np.concatenate(b_ub) if b_ub else None, A_eq=A_eq, b_eq=b_eq,
-                  bounds=bounds, method="highs")
-    return res.status != 2
+    return linprog(np.zeros(problem.n), A_ub=np.vstack(A_ub) if A_ub else None,
+                   b_ub=np.concatenate(b_ub) if b_ub else None, A_eq=A_eq, b_eq=b_eq,
+                   bounds=bounds, method="highs")

@@ -38,6 +38,10 @@ class SolverSpec:
             back-ends that accept positive semi-definite Hessians).
         retries: Alternative back-end settings tried, in order, when a QP fails (e.g. looser
             tolerances for an interior-point method that calls a thin feasible set infeasible).
+        certify: Every QP answer is sharpened on its active set and accepted only with a KKT
+            certificate (:mod:`uvms_qp.hqp.backends.certify`); an answer that cannot be
+            certified fails the QP (retries, then a truthful non-ok status). For back-ends whose
+            own "solved" is not accurate enough to trust.
         prox_steps: Proximal refinements ``min f + rho/2 |y - y_j|^2`` after the first QP of a
             level, each shrinking the bias of ``rho`` by a factor ``rho / sigma_min^2``.
     """
@@ -57,6 +61,7 @@ class SolverSpec:
     sparse: bool = False
     reg: float = 0.0
     prox_steps: int = 0
+    certify: bool = False
     retries: tuple[MappingProxyType[str, Any], ...] = ()
 
     @property
@@ -73,7 +78,7 @@ class SolverSpec:
 def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: float,
              freeze_margin: float, sparse: bool = False, reg: float = 0.0,
              prox_steps: int = 0, retries: tuple[dict[str, Any], ...] = (),
-             **settings: Any) -> SolverSpec:
+             certify: bool = False, **settings: Any) -> SolverSpec:
     return SolverSpec(
         name=f"cascade:{name}",
         kind="cascade",
@@ -86,6 +91,7 @@ def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: fl
         sparse=sparse,
         reg=reg,
         prox_steps=prox_steps,
+        certify=certify,
         retries=tuple(MappingProxyType(r) for r in retries),
     )
 
@@ -125,11 +131,11 @@ SOLVERS: tuple[SolverSpec, ...] = (
              eps_abs=1e-10, eps_rel=1e-12, retries=({"eps_abs": 1e-9}, {"eps_abs": 1e-8})),
     _cascade("clarabel", "clarabel", "clarabel", exact=False, agreement_tol=1e-6,
              freeze_margin=1e-9, sparse=True, tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10),
-    _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-4, freeze_margin=1e-8,
-             sparse=True, qp_regularization_value=1e-11, primal_feasibility_tolerance=1e-10,
+    _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-4, freeze_margin=1e-10,
+             sparse=True, certify=True, qp_regularization_value=1e-11, primal_feasibility_tolerance=1e-10,
              dual_feasibility_tolerance=1e-10, time_limit=1.0, qp_iteration_limit=10_000),
-    _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-6,
-             sparse=True,
+    _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-10,
+             sparse=True, certify=True,
              eps_abs=1e-8, eps_rel=1e-8, max_iter=20_000, polishing=True),
 )
 

@@ -25,11 +25,12 @@ from typing import Any
 import numpy as np
 
 from ..._validation import FloatArray
-from ..evaluate import hard_feasible, hard_scale, hard_violation, polish_hard
+from ..evaluate import hard_feasible, hard_point, hard_scale, hard_violation, polish_hard
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
 from . import BackendOutput
+from .certify import active_set_from, certified_point
 
 
 def _null_space(M: FloatArray, rtol: float) -> tuple[FloatArray, int]:
@@ -103,6 +104,8 @@ class CascadeBackend:
         self.reg = float(opts.pop("reg", spec.reg))
         self.prox_steps = int(opts.pop("prox_steps", spec.prox_steps))
         self.mult_tol = float(opts.pop("mult_tol", 1e-7))
+        #: QPs answered by the exact active-set rescue since construction (diagnostics)
+        self.rescued = 0
         self.settings = {**spec.settings, **opts}
 
     # -- one QP -------------------------------------------------------------------------------
@@ -133,34 +136,67 @@ class CascadeBackend:
         z = sol.x
         if z is None or not np.all(np.isfinite(z)):
             return None, none
-        if not sol.found and not _closest_feasible_is_optimal(sol, G, h, z):
-            return None, none
         z = np.asarray(z, dtype=np.float64)
-        if not self.spec.exact:
+        rescue = not sol.found and not _closest_feasible_is_optimal(sol, G, h, z)
+        if rescue and self.spec.exact:
+            return None, none
+        lam = None if sol.z is None else np.asarray(sol.z, dtype=np.float64)
+        lam_b = None if sol.z_box is None else np.asarray(sol.z_box, dtype=np.float64)
+        mult_tol = self.mult_tol if self.spec.exact else max(self.mult_tol, 1e-5)
+        if self.spec.certify or rescue:
+            # never trust the back-end (or rescue an answer it gave up on, e.g. a thin feasible
+            # set called infeasible): sharpen on its active set and prove the KKT conditions
+            cert = certified_point(P, q, G, h, lb, ub, z)
+            if cert is None:
+                return None, none
+            z, lam, lam_b, mult_tol = cert.z, cert.lam, cert.lam_box, self.mult_tol
+        elif not self.spec.exact:
             for act_tol in (1e-7, 1e-6, 1e-5):
                 zp = _polish_active_set(P, q, G, h, lb, ub, z, act_tol)
                 if zp is not z:
                     z = zp
                     break
-        active = [none]
-        # strongly active: positive multiplier AND tight at z (an interior-point method gives
-        # inactive constraints small positive multipliers; those must not be frozen)
-        mult_tol = self.mult_tol if self.spec.exact else max(self.mult_tol, 1e-5)
-        if G is not None and h is not None and sol.z is not None:
-            lam = np.asarray(sol.z, dtype=np.float64)
+        return z, self._strong(rows, G, h, lb, ub, z, lam, lam_b, mult_tol)
+
+    @staticmethod
+    def _strong(rows: _Rows, G: FloatArray | None, h: FloatArray | None, lb: FloatArray | None,
+                ub: FloatArray | None, z: FloatArray, lam: FloatArray | None,
+                lam_b: FloatArray | None, mult_tol: float) -> FloatArray:
+        """x-space rows of the constraints that are strongly active at ``z``.
+
+        Strongly active: positive multiplier AND tight at ``z`` (an interior-point method gives
+        inactive constraints small positive multipliers; those must not be frozen).
+        """
+        active = [np.zeros((0, rows.n))]
+        if G is not None and h is not None and lam is not None:
             thr = mult_tol * max(1.0, float(np.abs(lam).max(initial=0.0)))
             X = rows.xrows()
             tight = h - G @ z <= 1e-8 * (1.0 + np.abs(h))
             strong = (lam > thr) & tight & (np.abs(X).max(axis=1, initial=0.0) > 0.0)
             active.append(X[strong])
-        if lb is not None and ub is not None and sol.z_box is not None:
+        if lb is not None and ub is not None and lam_b is not None:
             zb = z[: rows.n]
-            lam_b = np.abs(np.asarray(sol.z_box, dtype=np.float64))[: rows.n]
+            lam_b = np.abs(lam_b)[: rows.n]
             thr = mult_tol * max(1.0, float(lam_b.max(initial=0.0)))
             tight = (zb - lb[: rows.n] <= 1e-8 * (1.0 + _finite_abs(lb[: rows.n]))) | (
                 ub[: rows.n] - zb <= 1e-8 * (1.0 + _finite_abs(ub[: rows.n])))
             active.append(np.eye(rows.n)[(lam_b > thr) & tight])
-        return z, np.vstack(active)
+        return np.vstack(active)
+
+    def _rescue(self, P: FloatArray, q: FloatArray, rows: _Rows, lb: FloatArray | None,
+                ub: FloatArray | None, z0: FloatArray) -> tuple[FloatArray | None, FloatArray]:
+        """Exact active-set solve from the feasible point ``z0`` when every attempt failed.
+
+        ``z0`` keeps the previous level's answer (``y = 0``, feasible by construction); the
+        answer counts only with a KKT certificate (:mod:`~uvms_qp.hqp.backends.certify`).
+        """
+        G, h = rows.arrays()
+        cert = active_set_from(P, q, G, h, lb, ub, z0)
+        if cert is None:
+            return None, np.zeros((0, rows.n))
+        self.rescued += 1
+        return cert.z, self._strong(rows, G, h, lb, ub, cert.z, cert.lam, cert.lam_box,
+                                    self.mult_tol)
 
     def _constraints(self, problem: Problem, xp: FloatArray, Z: FloatArray, width: int,
                      frozen: list[tuple[FloatArray, FloatArray, FloatArray]]
@@ -280,6 +316,21 @@ class CascadeBackend:
                 z, active = self._qp(Pr, qr, rows, lb, ub, extra)
             if z is not None and self._feasible(problem, xp + Z @ z[:p]):
                 return z, active
+        # rescue from y = 0 (the previous answer), else from a vertex of the hard set, with the
+        # smallest slacks that satisfy the level's own rows
+        for y0 in (np.zeros(p), None):
+            if y0 is None:
+                xh = hard_point(problem) if not frozen else None
+                if xh is None:
+                    break
+                y0 = Z.T @ (xh - xp)
+            z0 = np.concatenate((y0, np.zeros(q_t)))
+            if q_t:
+                yi = level.A[ineq] @ (xp + Z @ y0)
+                z0[p:] = np.clip(0.0, level.lo[ineq] - yi, level.hi[ineq] - yi)
+            z, active = self._rescue(P, q, rows, lb, ub, z0)
+            if z is not None and self._feasible(problem, xp + Z @ z[:p]):
+                return z, active
         return None, np.zeros((0, problem.n))
 
     def _final(self, problem: Problem, xp: FloatArray, Z: FloatArray,
@@ -294,6 +345,9 @@ class CascadeBackend:
             z, _ = self._qp(P, q, rows, lb, ub, extra)
             if z is not None and self._feasible(problem, xp + Z @ z):
                 return z
+        z, _ = self._rescue(P, q, rows, lb, ub, np.zeros(p))
+        if z is not None and self._feasible(problem, xp + Z @ z):
+            return z
         return None
 
     def _feasible(self, problem: Problem, x: FloatArray) -> bool:
