@@ -98,3 +98,52 @@ def test_active_set_rescue_equals_the_projection():
         cert = active_set_from(P, q, G, h, None, None, u - 1.0)
         assert cert is not None
         assert cert.z == pytest.approx(np.minimum(c, u), abs=1e-12)
+
+
+class _FailingQpsolvers:
+    """qpsolvers stand-in whose ``solve_problem`` always raises ``exc``."""
+
+    def __init__(self, module, exc):
+        self._module, self._exc = module, exc
+
+    def __getattr__(self, name):
+        return getattr(self._module, name)
+
+    def solve_problem(self, *args, **kwargs):
+        raise self._exc
+
+
+def _failing_solver(exc):
+    from uvms_qp.hqp import HierarchySolver
+
+    solver = HierarchySolver("cascade:quadprog")
+    solver._backend._qpsolvers = _FailingQpsolvers(solver._backend._qpsolvers, exc)
+    return solver
+
+
+def test_cascade_rescues_every_failed_qp_exactly():
+    """A back-end that fails every QP: the certified active-set rescue gives the exact optimum."""
+    from uvms_qp.hqp import HierarchySolver
+
+    rng = np.random.default_rng(6)
+    A1, A2 = rng.standard_normal((2, 5)), rng.standard_normal((4, 5))
+    # level 1 cannot be met inside the box: bounds active, a compromise to reproduce exactly
+    levels = [[(A1, rng.standard_normal(2))], [(A2, np.ones(4), 1.0 + rng.uniform(size=4))]]
+    lower, upper = -0.3 * np.ones(5), 0.4 * np.ones(5)
+    reference = HierarchySolver("cascade:quadprog").solve(levels, lower, upper)
+    result = _failing_solver(RuntimeError("boom")).solve(levels, lower, upper)
+    assert result.ok and result.info["rescued_qps"] == 3  # two levels and the final QP
+    assert reference.infeasible_level == 1 and reference.active_upper.any()
+    assert result.status is reference.status
+    assert result.x == pytest.approx(reference.x, abs=1e-9)
+    assert result.hard_violation <= 1e-12
+    assert result.level_residuals == pytest.approx(reference.level_residuals, abs=1e-9)
+
+
+def test_cascade_obeys_a_deadline_guard():
+    """A TimeoutError (the safety layer's deadline guard) stops the cascade without a rescue."""
+    rng = np.random.default_rng(7)
+    levels = [[(rng.standard_normal((2, 4)), rng.standard_normal(2))]]
+    result = _failing_solver(TimeoutError("deadline")).solve(levels, -np.ones(4), np.ones(4))
+    assert not result.ok and "level 0" in result.message
+    assert np.all(np.isfinite(result.x))

@@ -106,6 +106,7 @@ class CascadeBackend:
         self.mult_tol = float(opts.pop("mult_tol", 1e-7))
         #: QPs answered by the exact active-set rescue since construction (diagnostics)
         self.rescued = 0
+        self._stopped = False  # a QP raised TimeoutError in this solve (deadline guard)
         self.settings = {**spec.settings, **opts}
 
     # -- one QP -------------------------------------------------------------------------------
@@ -131,6 +132,9 @@ class CascadeBackend:
             problem = self._qpsolvers.Problem(Ps, q, Gs, h, None, None, lb, ub)
             sol = self._qpsolvers.solve_problem(problem, solver=self.spec.qp_name,
                                                 **{**self.settings, **(extra or {})})
+        except TimeoutError:  # a deadline guard refused the QP: stop, no rescue either
+            self._stopped = True
+            return None, none
         except Exception:  # a back-end crash is a failed level, reported truthfully
             return None, none
         z = sol.x
@@ -189,7 +193,11 @@ class CascadeBackend:
 
         ``z0`` keeps the previous level's answer (``y = 0``, feasible by construction); the
         answer counts only with a KKT certificate (:mod:`~uvms_qp.hqp.backends.certify`).
+        A :class:`TimeoutError` from the QP layer in this solve (a deadline guard) disables the
+        rescue, so that a guard that stops work is obeyed.
         """
+        if self._stopped:
+            return None, np.zeros((0, rows.n))
         G, h = rows.arrays()
         cert = active_set_from(P, q, G, h, lb, ub, z0)
         if cert is None:
@@ -231,8 +239,14 @@ class CascadeBackend:
 
     # -- the cascade --------------------------------------------------------------------------
     def solve(self, problem: Problem) -> BackendOutput:
-        """Solve level by level; on a failed QP return the last verified point and say so."""
+        """Solve level by level; on a failed QP return the last verified point and say so.
+
+        ``info["rescued_qps"]`` counts the QPs of this solve that the back-end failed and the
+        exact active-set rescue answered (each with a KKT certificate).
+        """
         n = problem.n
+        rescued = self.rescued
+        self._stopped = False
         xp = np.zeros(n)
         Z = np.eye(n)
         hard = problem.hard
@@ -275,7 +289,7 @@ class CascadeBackend:
                 return self._failure(problem, x, len(problem.levels))
             x = xp + Z @ z
         x = polish_hard(problem, x)
-        return BackendOutput(x, Status.OPTIMAL, "")
+        return BackendOutput(x, Status.OPTIMAL, "", {"rescued_qps": self.rescued - rescued})
 
     def _level(self, problem: Problem, level: Any, xp: FloatArray, Z: FloatArray,
                frozen: list[tuple[FloatArray, FloatArray, FloatArray]]
@@ -319,6 +333,8 @@ class CascadeBackend:
         # rescue from y = 0 (the previous answer), else from a vertex of the hard set, with the
         # smallest slacks that satisfy the level's own rows
         for y0 in (np.zeros(p), None):
+            if self._stopped:
+                break
             if y0 is None:
                 xh = hard_point(problem) if not frozen else None
                 if xh is None:
