@@ -77,6 +77,7 @@ class PayloadMomentTask(Task):
             raise InputError(f"{self.name}.maximum: required in mode 'bound'")
         self.normalize = normalize
         self._nvh = 0
+        self._zeros: list[float] = []
         self._select = np.zeros((0, 0))
         self.value = float("nan")
 
@@ -90,6 +91,7 @@ class PayloadMomentTask(Task):
         if model.n_joints == 0:
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
         self._nvh = model.n_vehicle
+        self._zeros = [0.0] * model.n_vehicle  # vehicle columns of the bound row
         n = model.n_joints
         self._select = np.zeros((n, model.nv))  # rows of the reduce mode: qdot = ...
         self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
@@ -104,17 +106,22 @@ class PayloadMomentTask(Task):
         return (x * x + y * y) * F, grad
 
     def _lever_arm(self, state: State) -> tuple[float, float]:
-        """``(x_E, y_E)`` [m]: the frame's origin in arm-base coordinates."""
-        T_wb = state.pose("arm_base")
-        x, y, _ = (T_wb[:3, :3].T @ (state.position(self.frame) - T_wb[:3, 3])).tolist()
-        return x, y
+        """``(x_E, y_E)`` [m]: the frame's origin in arm-base coordinates.
+
+        ``R_wb^T (p - t_wb)`` (first two entries) in plain floats.
+        """
+        (r00, r01, _, t0), (r10, r11, _, t1), (r20, r21, _, t2), _ = (
+            state.pose("arm_base").tolist())
+        p0, p1, p2 = state.position(self.frame).tolist()
+        d0, d1, d2 = p0 - t0, p1 - t1, p2 - t2
+        return r00 * d0 + r10 * d1 + r20 * d2, r01 * d0 + r11 * d1 + r21 * d2
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
         """Write the reduce rows or the bound row (see the class docstring).
 
         The gradient is written straight into the row buffer (the operations of
-        :meth:`compute_value`).
+        :meth:`compute_value`; the bound row as one list of plain floats).
         """
         x, y = self._lever_arm(state)
         Jp = state.arm_jacobian(self.frame)
@@ -123,10 +130,8 @@ class PayloadMomentTask(Task):
         self.value = M
         self._last_error = np.array([M])
         if self.mode == "bound":
-            A[0, : self._nvh] = 0.0
-            g = A[0, self._nvh:]
-            np.multiply(2.0 * F * x, Jp[0], out=g)
-            g += (2.0 * F * y) * Jp[1]
+            a, b = 2.0 * F * x, 2.0 * F * y
+            A[0] = self._zeros + [a * u + b * v for u, v in zip(*Jp[:2].tolist(), strict=True)]
             lower[0] = -np.inf
             upper[0] = self.gain * (self.maximum - M)  # type: ignore[operator]
             return
