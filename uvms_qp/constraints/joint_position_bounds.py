@@ -51,7 +51,8 @@ class JointPositionBounds(Constraint):
         self._cols = np.zeros(0, dtype=int)
         self._idx = np.zeros(0, dtype=int)
         self._lo = self._hi = np.zeros(0)
-        self._scratch = (np.zeros(0), np.zeros(0))
+        self._lo_list: list[float] = []
+        self._hi_list: list[float] = []
 
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")
@@ -65,7 +66,7 @@ class JointPositionBounds(Constraint):
         self._idx = compact_index(idx[finite])
         self._cols = compact_index(model.n_vehicle + idx[finite])
         self._lo, self._hi = lo[finite], hi[finite]
-        self._scratch = (np.empty(self._lo.size), np.empty(self._lo.size))
+        self._lo_list, self._hi_list = self._lo.tolist(), self._hi.tolist()
         return 0
 
     def joint_band(self, q: FloatArray, dt: float) -> tuple[FloatArray, FloatArray]:
@@ -82,24 +83,16 @@ class JointPositionBounds(Constraint):
     def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
         """Intersect the joint-rate bounds into the box.
 
-        The operations of :meth:`joint_band`, in two scratch buffers owned by the constraint.
+        The operations of :meth:`joint_band` per joint in plain floats (cheaper than array
+        calls for the handful of joints of an arm), then ``max``/``min`` with the box.
         """
         cols = self._cols
-        q = state.joints[self._idx]
+        q = state.joints[self._idx].tolist()
         k = self.gain / dt
-        lo, hi = self._scratch
-        np.subtract(self._lo, q, out=lo)
-        lo *= k
-        np.subtract(self._hi, q, out=hi)
-        hi *= k
-        np.minimum(lo, 0.0, out=lo)
-        np.maximum(hi, 0.0, out=hi)
-        if isinstance(cols, slice):  # views: intersect in place
-            np.maximum(lower[cols], lo, out=lower[cols])
-            np.minimum(upper[cols], hi, out=upper[cols])
-        else:
-            lower[cols] = np.maximum(lower[cols], lo)
-            upper[cols] = np.minimum(upper[cols], hi)
+        lower[cols] = [max(b, min((a - x) * k, 0.0)) for a, x, b in
+                       zip(self._lo_list, q, lower[cols].tolist(), strict=True)]
+        upper[cols] = [min(b, max((a - x) * k, 0.0)) for a, x, b in
+                       zip(self._hi_list, q, upper[cols].tolist(), strict=True)]
 
     def update(self, **params: Any) -> None:
         """Accepts ``gain``."""

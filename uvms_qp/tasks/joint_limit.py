@@ -145,6 +145,10 @@ class JointLimitTask(Task):
         self._jsel: Any = self._idx
         self._lo = self._hi = self._C = self._lo_m = self._hi_m = np.zeros(0)
         self._A = np.zeros((0, 0))
+        self._lo_list: list[float] = []
+        self._hi_list: list[float] = []
+        self._lo_m_list: list[float] = []
+        self._hi_m_list: list[float] = []
         self.value = float("nan")
 
     @property
@@ -185,6 +189,8 @@ class JointLimitTask(Task):
         """The margin band ``[q_min + margin, q_max - margin]`` [rad] (mode ``'margin'``)."""
         self._lo_m = self._lo + self.margin
         self._hi_m = self._hi - self.margin
+        self._lo_m_list, self._hi_m_list = self._lo_m.tolist(), self._hi_m.tolist()
+        self._lo_list, self._hi_list = self._lo.tolist(), self._hi.tolist()
 
     @property
     def joint_indices(self) -> np.ndarray:
@@ -199,13 +205,14 @@ class JointLimitTask(Task):
              upper: FloatArray) -> None:
         """Write the gradient rows or the margin band (see the class docstring)."""
         A[:] = self._A
-        if self.mode == "margin":
-            q = state.joints[self._jsel]
-            np.subtract(self._lo_m, q, out=lower)
-            lower *= self.gain
-            np.subtract(self._hi_m, q, out=upper)
-            upper *= self.gain
-            self._last_error = np.array([min((q - self._lo).min(), (self._hi - q).min())])
+        if self.mode == "margin":  # plain floats: a handful of joints
+            q = state.joints[self._jsel].tolist()
+            k = self.gain
+            lower[:] = [(a - x) * k for a, x in zip(self._lo_m_list, q, strict=True)]
+            upper[:] = [(b - x) * k for b, x in zip(self._hi_m_list, q, strict=True)]
+            self._last_error = np.array([min(
+                min([x - a for a, x in zip(self._lo_list, q, strict=True)]),
+                min([b - x for b, x in zip(self._hi_list, q, strict=True)]))])
             return
         H, g = self.compute_value(state)
         self.value = H
