@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -9,6 +10,7 @@ import numpy as np
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
 from ._common import (
+    _TWO_PI,
     compact_index,
     eta_axes,
     parse_axes,
@@ -63,6 +65,8 @@ class VehicleAttitudeTask(ErrorTask):
         self._idx: Any = np.zeros(0, dtype=int)
         self._all: list[int] = []
         self._target = np.zeros(0)
+        self._eta_pos: list[int] = []
+        self._pairs: list[tuple[float, int]] = []
 
     def _bind(self, model: Model) -> int:
         known = eta_axes(model)
@@ -77,7 +81,13 @@ class VehicleAttitudeTask(ErrorTask):
         self._idx = compact_index([known.index(a) for a in self.axes])
         self._all = list(range(len(self.axes)))
         self._target = np.array([self.roll if a == "phi" else self.pitch for a in self.axes])
+        self._eta_pos = [known.index(a) for a in self.axes]
+        self._set_pairs()
         return len(self.axes)
+
+    def _set_pairs(self) -> None:
+        """``(set point [rad], index into eta)`` per row, for the plain-float error."""
+        self._pairs = list(zip(self._target.tolist(), self._eta_pos, strict=True))
 
     def compute_error(self, state: State, t: float) -> FloatArray:
         """``wrap(angle_d - angle)`` on the selected axes [rad]."""
@@ -91,8 +101,15 @@ class VehicleAttitudeTask(ErrorTask):
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write ``J_eta,S zeta = K wrap(eta_d - eta)_S``."""
-        e = self.compute_error(state, t)
+        """Write ``J_eta,S zeta = K wrap(eta_d - eta)_S``.
+
+        The error in plain floats (the operations of :meth:`compute_error` and
+        :func:`~uvms_qp.tasks._common.wrap_angle` per angle); the rows are a slice of the
+        state's cached ``J_eta``.
+        """
+        eta = state.eta.tolist()
+        e = np.array([(a - eta[i] + math.pi) % _TWO_PI - math.pi
+                      for a, i in self._pairs])
         A[:] = state.vehicle_pose_jacobian()[self._idx]
         self._set_sides(e, None, lower, upper)
 
@@ -106,5 +123,6 @@ class VehicleAttitudeTask(ErrorTask):
             if self.model is not None:
                 self._target = np.array([self.roll if a == "phi" else self.pitch
                                          for a in self.axes])
+                self._set_pairs()
         else:
             super()._apply_update(key, value)
