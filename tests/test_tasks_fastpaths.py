@@ -241,3 +241,73 @@ def test_manipulability_rows_use_the_gradient(mode):
             np.testing.assert_array_equal(A[:, nvh:], np.eye(BLUEROV.n_joints))
             np.testing.assert_array_equal(lo, 2.0 * g)
             np.testing.assert_array_equal(hi, lo)
+
+
+def _outside_states(model, n=10, seed=11):
+    """States with joints drawn up to 20 % of the range beyond either limit."""
+    rng = np.random.default_rng(seed)
+    lo, hi = model.joint_lower, model.joint_upper
+    span = hi - lo
+    out = []
+    for _ in range(n):
+        eta, _ = model.split(model.random_configuration(rng))
+        joints = rng.uniform(lo - 0.2 * span, hi + 0.2 * span)
+        out.append(model.state(model.configuration(eta, joints)))
+    return out
+
+
+@pytest.mark.parametrize("joints", [None, ["axis_d", "axis_b"]])
+def test_joint_position_bounds_intersect_a_filled_box_like_numpy(joints):
+    """The per-joint float path equals ``max(box, min(band, 0))`` / ``min(box, max(band, 0))``."""
+    con = JointPositionBounds(gain=0.7, margin=0.02, joints=joints).bind(BLUEROV)
+    cols = BLUEROV.n_vehicle + np.array(
+        [BLUEROV.joint_names.index(j) for j in (joints or BLUEROV.joint_names)])
+    rng = np.random.default_rng(12)
+    for state in _states(BLUEROV, n=10, seed=13) + _outside_states(BLUEROV):
+        box_lo = -rng.uniform(0.0, 3.0, BLUEROV.nv)
+        box_hi = rng.uniform(0.0, 3.0, BLUEROV.nv)
+        lower, upper = box_lo.copy(), box_hi.copy()
+        con.fill_box(state, 0.05, lower, upper)
+        q = state.joints[cols - BLUEROV.n_vehicle]
+        k = 0.7 / 0.05
+        band_lo = np.minimum((BLUEROV.joint_lower[cols - BLUEROV.n_vehicle] + 0.02 - q) * k, 0.0)
+        band_hi = np.maximum((BLUEROV.joint_upper[cols - BLUEROV.n_vehicle] - 0.02 - q) * k, 0.0)
+        ref_lo, ref_hi = box_lo.copy(), box_hi.copy()
+        ref_lo[cols] = np.maximum(box_lo[cols], band_lo)
+        ref_hi[cols] = np.minimum(box_hi[cols], band_hi)
+        np.testing.assert_array_equal(lower, ref_lo)
+        np.testing.assert_array_equal(upper, ref_hi)
+        assert np.all(lower <= 0.0) and np.all(upper >= 0.0)
+
+
+def test_joint_limit_margin_on_a_joint_subset_and_outside_the_limits():
+    task = JointLimitTask(mode="margin", margin=0.1, gain=1.5,
+                          joints=["axis_b", "axis_e"]).bind(BLUEROV)
+    idx = task.joint_indices
+    lo_lim, hi_lim = BLUEROV.joint_lower[idx], BLUEROV.joint_upper[idx]
+    for state in _outside_states(BLUEROV, seed=14):
+        _, lo, hi = _fill(task, state)
+        q = state.joints[idx]
+        np.testing.assert_array_equal(lo, 1.5 * (lo_lim + 0.1 - q))
+        np.testing.assert_array_equal(hi, 1.5 * (hi_lim - 0.1 - q))
+        assert task._last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()
+
+
+def test_vehicle_attitude_set_point_update_reaches_the_fused_rows():
+    task = VehicleAttitudeTask(roll=0.0, pitch=0.0, gain=[1.0, 2.0]).bind(BLUEROV)
+    task.update(roll=-3.0, pitch=3.1)
+    for state in _states(BLUEROV, n=10, seed=15):
+        _, lo, _ = _fill(task, state)
+        phi, theta = state.eta[3], state.eta[4]
+        ref = wrap_angle(np.array([-3.0 - phi, 3.1 - theta])) * np.array([1.0, 2.0])
+        np.testing.assert_array_equal(lo, ref)
+
+
+def test_payload_lever_arm_is_the_tool_position_in_the_arm_base_frame():
+    task = PayloadMomentTask(force=5.0).bind(BLUEROV)
+    for state in _states(BLUEROV, n=10, seed=16):
+        x, y = task._lever_arm(state)
+        T = state.pose_in("tool", "arm_base")
+        np.testing.assert_allclose([x, y], T[:2, 3], rtol=0.0, atol=1e-15)
+        M, _ = task.compute_value(state)
+        assert pytest.approx(5.0 * (T[0, 3] ** 2 + T[1, 3] ** 2), rel=1e-14) == M
