@@ -86,13 +86,13 @@ class JointPositionBounds(Constraint):
         The operations of :meth:`joint_band` per joint in plain floats (cheaper than array
         calls for the handful of joints of an arm), then ``max``/``min`` with the box.
         """
-        cols = self._cols
+        cols = self._cols  # the lists below are sized at bind
         q = state.joints[self._idx].tolist()
         k = self.gain / dt
         lower[cols] = [max(b, min((a - x) * k, 0.0)) for a, x, b in
-                       zip(self._lo_list, q, lower[cols].tolist(), strict=True)]
+                       zip(self._lo_list, q, lower[cols].tolist(), strict=False)]
         upper[cols] = [min(b, max((a - x) * k, 0.0)) for a, x, b in
-                       zip(self._hi_list, q, upper[cols].tolist(), strict=True)]
+                       zip(self._hi_list, q, upper[cols].tolist(), strict=False)]
 
     def update(self, **params: Any) -> None:
         """Accepts ``gain``."""

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import eta_axes, vehicle_pose_jacobian
+from ._common import _TWO_PI, eta_axes, vehicle_pose_jacobian
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -86,10 +86,15 @@ class CurrentAlignmentTask(ErrorTask):
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write ``J_psi zeta = K wrap(psi_c + offset - psi)``."""
-        e = self.compute_error(state, t)
+        """Write ``J_psi zeta = K wrap(psi_c + offset - psi)``.
+
+        The operations of :meth:`compute_error` in plain floats.
+        """
+        if self.heading is None:
+            self.compute_error(state, t)  # raises the missing-heading error
+        e = (self.heading + self.offset - state.eta.item(self._row) + math.pi) % _TWO_PI
         A[:] = state.vehicle_pose_jacobian()[self._row: self._row + 1]
-        self._set_sides(e, None, lower, upper)
+        self._set_sides_floats([e - math.pi], lower, upper)
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

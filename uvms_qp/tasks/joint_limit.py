@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from operator import sub
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -205,14 +206,13 @@ class JointLimitTask(Task):
              upper: FloatArray) -> None:
         """Write the gradient rows or the margin band (see the class docstring)."""
         A[:] = self._A
-        if self.mode == "margin":  # plain floats: a handful of joints
+        if self.mode == "margin":  # plain floats: a handful of joints (lists sized at bind)
             q = state.joints[self._jsel].tolist()
             k = self.gain
-            lower[:] = [(a - x) * k for a, x in zip(self._lo_m_list, q, strict=True)]
-            upper[:] = [(b - x) * k for b, x in zip(self._hi_m_list, q, strict=True)]
-            self._last_error = np.array([min(
-                min([x - a for a, x in zip(self._lo_list, q, strict=True)]),
-                min([b - x for b, x in zip(self._hi_list, q, strict=True)]))])
+            lower[:] = [(a - x) * k for a, x in zip(self._lo_m_list, q, strict=False)]
+            upper[:] = [(b - x) * k for b, x in zip(self._hi_m_list, q, strict=False)]
+            self._last_error = np.array((min(min(map(sub, q, self._lo_list)),
+                                             min(map(sub, self._hi_list, q))),))
             return
         H, g = self.compute_value(state)
         self.value = H

@@ -131,7 +131,7 @@ class PayloadMomentTask(Task):
         self._last_error = np.array([M])
         if self.mode == "bound":
             a, b = 2.0 * F * x, 2.0 * F * y
-            A[0] = self._zeros + [a * u + b * v for u, v in zip(*Jp[:2].tolist(), strict=True)]
+            A[0] = self._zeros + [a * u + b * v for u, v in zip(*Jp[:2].tolist(), strict=False)]
             lower[0] = -np.inf
             upper[0] = self.gain * (self.maximum - M)  # type: ignore[operator]
             return

@@ -270,6 +270,21 @@ class ErrorTask(Task):
             lower += ff
         upper[:] = lower
 
+    def _set_sides_floats(self, e: list[float], lower: FloatArray, upper: FloatArray) -> None:
+        """:meth:`_set_sides` without feed-forward for an error given as plain floats.
+
+        ``lower = upper = K e`` entry by entry (the same products as the array version),
+        written with one assignment per side; the kept error is a new array.
+        """
+        gain = self.gain  # per-row gains are checked against dim at bind and update
+        if isinstance(gain, np.ndarray):
+            sides = [k * x for k, x in zip(gain.tolist(), e, strict=False)]
+        else:
+            sides = [gain * x for x in e]
+        lower[:] = sides
+        upper[:] = sides
+        self._last_error = np.array(e)
+
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
         return (*super().updatable(), "gain")

@@ -108,10 +108,9 @@ class VehicleAttitudeTask(ErrorTask):
         state's cached ``J_eta``.
         """
         eta = state.eta.tolist()
-        e = np.array([(a - eta[i] + math.pi) % _TWO_PI - math.pi
-                      for a, i in self._pairs])
         A[:] = state.vehicle_pose_jacobian()[self._idx]
-        self._set_sides(e, None, lower, upper)
+        self._set_sides_floats([(a - eta[i] + math.pi) % _TWO_PI - math.pi
+                                for a, i in self._pairs], lower, upper)
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
