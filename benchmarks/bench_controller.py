@@ -8,6 +8,10 @@ Both follow the same moving target (a circle around the start tool position) and
 their own zeta, so warm-start conditions are realistic. Prints medians, p99 and the ratio.
 
     python benchmarks/bench_controller.py [--steps 2000] [--solver daqp] [--breakdown 2000]
+        [--scenario bluerov2_demo]
+
+``--scenario NAME`` adds the per-task breakdown and the full-step median (fresh state every
+tick, target time advancing) of a bundled scenario's controller.
 """
 
 from __future__ import annotations
@@ -121,6 +125,9 @@ def main() -> None:
     parser.add_argument("--pink-solver", default="daqp", help="qpsolvers name used by Pink")
     parser.add_argument("--breakdown", type=int, default=2000, metavar="N",
                         help="ticks of the per-task breakdown with fresh states (0: skip)")
+    parser.add_argument("--scenario", default="", metavar="NAME",
+                        help="also break down this bundled scenario's controller (e.g. "
+                             "bluerov2_demo)")
     args = parser.parse_args()
 
     model = load_model("bluerov2_heavy_alpha5")
@@ -171,14 +178,22 @@ def main() -> None:
           f"same content {s_med / p_med:.2f}")
     if args.breakdown:
         print_breakdown(model, ctrl, q0, args.breakdown)
+    if args.scenario:
+        from uvms_qp.sim import load_scenario
+
+        sc_ctrl = load_scenario(args.scenario).make_controller()
+        print(f"scenario {args.scenario}: {sc_ctrl.model.name}, "
+              f"{sum(t.dim for t in sc_ctrl.tasks)} task rows")
+        print_breakdown(sc_ctrl.model, sc_ctrl, None, args.breakdown or 2000, step=True)
 
 
-def print_breakdown(model, ctrl, q0, reps):
+def print_breakdown(model, ctrl, q0, reps, step=False):
     """Per-tick cost of the rows and bounds with a fresh state every tick (no warm caches).
 
     Each task is timed alone as ``model.state(q) + task.fill`` minus ``model.state(q)``, so it
     includes the kinematic getters it triggers (shared getters count in every task using them;
-    the sum exceeds the whole). Configurations cycle through a random set.
+    the sum exceeds the whole). Configurations cycle through a random set. With ``step`` the
+    whole ``ctrl.step(model.state(q), t)`` is timed too (``q0`` is unused).
     """
     rng = np.random.default_rng(0)
     qs = [model.random_configuration(rng) for _ in range(32)]
@@ -215,12 +230,17 @@ def print_breakdown(model, ctrl, q0, reps):
         start = clock()
         model.state(q).vehicle_pose_jacobian()
         samples.setdefault("state+vehicle_pose_jacobian", []).append(clock() - start)
+        if step:
+            start = clock()
+            ctrl.step(model.state(q), r * dt)
+            samples.setdefault("full step (state + step)", []).append(clock() - start)
     base = stats(samples["state"])[0]
     print(f"breakdown, fresh state every tick ({reps} ticks, medians; rows below 'state' exclude "
           f"the state update of {base:.1f} us)")
     for label, values in samples.items():
         med = stats(values)[0]
-        print(f"  {label:<48}{med if label == 'state' else med - base:8.1f} us")
+        own = label == "state" or label.startswith("full step")
+        print(f"  {label:<48}{med if own else med - base:8.1f} us")
 
 
 if __name__ == "__main__":

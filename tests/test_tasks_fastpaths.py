@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from uvms_qp.constraints import JointPositionBounds
+from uvms_qp.errors import InputError
 from uvms_qp.model import load_model
 from uvms_qp.tasks import (
     CurrentAlignmentTask,
@@ -79,6 +80,7 @@ ERROR_TASKS = [
     lambda: StationKeepingTask(target=[0.1, -0.2, 0.3, 3.1], gain=[1.0, 2.0, 3.0, 4.0]),
     lambda: StationKeepingTask(axes=["psi", "x", "phi", "theta"], target=[-3.1, 0.1, 3.0, -3.0]),
     lambda: CurrentAlignmentTask(heading=3.0, offset=0.5, gain=0.7),
+    lambda: CurrentAlignmentTask(heading=-3.1, offset=-0.2, gain=[1.3]),
     lambda: VehicleAttitudeTask(roll=3.1, pitch=-0.2, gain=[1.0, 2.0]),
     lambda: VehicleAttitudeTask(axes=["theta"], pitch=0.3),
     lambda: PostureTask(joints=["axis_b", "axis_d"], posture=[1.0, 2.0], gain=0.3),
@@ -311,3 +313,9 @@ def test_payload_lever_arm_is_the_tool_position_in_the_arm_base_frame():
         np.testing.assert_allclose([x, y], T[:2, 3], rtol=0.0, atol=1e-15)
         M, _ = task.compute_value(state)
         assert pytest.approx(5.0 * (T[0, 3] ** 2 + T[1, 3] ** 2), rel=1e-14) == M
+
+
+def test_current_alignment_fill_without_heading_names_the_task():
+    task = CurrentAlignmentTask(name="yaw").bind(BLUEROV)
+    with pytest.raises(InputError, match="yaw"):
+        _fill(task, _states(BLUEROV, n=1)[0])
