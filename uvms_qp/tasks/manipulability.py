@@ -166,7 +166,7 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
         sel = [int(r) for r in rows.reshape(-1).tolist()]
     else:  # any sequence of ints (a tuple would index J6 as (row, column))
         sel = [int(r) for r in rows]
-    if sel == [0, 1, 2]:
+    if rows is None or sel == [0, 1, 2]:
         fast = _position_gradient(cols)
         if fast is not None:
             return fast[0], np.array(fast[1])
