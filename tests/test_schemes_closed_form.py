@@ -133,3 +133,31 @@ def test_sc_fields_lie_in_the_kernel_of_the_model_jacobian(q):
     scheme = NenchevSingularityConsistent().bind(NENCHEV, 0.01)
     zeta = scheme.step(state, 0.0).zeta
     np.testing.assert_allclose(zeta, f_ep[:4], atol=1e-12)
+
+
+PAPER_SCENARIOS = [
+    "paper000_quintic", "paper001_circle", "paper002_line_constant_arm_angle",
+    "paper002_line_self_motion", "paper003_case2_pseudoinverse", "paper003_case3_payload",
+]
+
+
+@pytest.mark.parametrize("scenario_name", PAPER_SCENARIOS)
+def test_every_scheme_step_result_has_a_summary(scenario_name):
+    scenario = load_scenario(scenario_name)
+    names = [n for n in scenario.schemes if n != "hqp"]
+    assert names
+    state = scenario.model.state(scenario.q0)
+    for name in names:
+        result = build_scheme(name, scenario).step(state, 0.0)
+        text = result.summary()
+        assert len(result.level_violations) == len(result.level_names)
+        for task, (norm, unit) in result.task_residuals.items():
+            assert task in text and f"[{unit}]" in text
+            assert np.isfinite(norm)
+
+
+def test_registry_covers_the_paper_scenarios():
+    listed = set()
+    for scenario_name in PAPER_SCENARIOS:
+        listed.update(load_scenario(scenario_name).schemes)
+    assert set(SCHEME_TYPES) <= listed

@@ -136,36 +136,14 @@ def _make_result(
 ) -> StepResult:
     """Pack a closed-form step into the controller's result type.
 
-    There is no hierarchy solve: the embedded :class:`~uvms_qp.hqp.HierarchyResult` carries
-    ``zeta`` with status ``optimal``, no level residuals, and the step time as solve time; the
-    box is unbounded (a closed-form scheme knows no hard bounds). ``task_residuals`` and
-    ``task_errors`` report the scheme's own task error norms with their units.
+    Uses the public :meth:`~uvms_qp.controller.StepResult.from_command`: no hierarchy solve, status
+    ``optimal``, the step time as solve time, an unbounded box (a closed-form scheme knows no hard
+    bounds); ``task_residuals`` and ``task_errors`` report the scheme's own task error norms with
+    their units, all in one level.
     """
     from ..controller import StepResult
-    from ..hqp import HierarchyResult, Status
 
-    n = zeta.shape[0]
-    names = tuple(residuals)
-    values = [residuals[k][0] for k in names]
-    units = tuple(residuals[k][1] for k in names)
-    hierarchy = HierarchyResult(
-        x=zeta, status=Status.OPTIMAL, solver="closed-form", solve_time=step_time,
+    return StepResult.from_command(
+        zeta, t=t, step_time=step_time, scheme=name, solver="closed-form", residuals=residuals,
         message=f"closed-form scheme {name}",
-    )
-    return StepResult(
-        zeta=zeta,
-        status=Status.OPTIMAL,
-        hierarchy=hierarchy,
-        t=t,
-        step_time=step_time,
-        scheme=name,
-        solver="closed-form",
-        lower=np.full(n, -np.inf),
-        upper=np.full(n, np.inf),
-        level_names=(names,) if names else (),
-        _task_names=names,
-        _rate_units=units,
-        _error_units=units,
-        _residual_sq=np.square(np.asarray(values, dtype=np.float64)),
-        _errors=tuple(np.array([v]) for v in values),
     )
