@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uvms_qp.errors import InputError, UnknownFrameError, UnknownJointError
+from uvms_qp.errors import InputError, ShapeError, UnknownFrameError, UnknownJointError
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import (
@@ -217,3 +217,34 @@ def test_joint_limit_damping_weights_follow_eq17(rov):
     np.testing.assert_allclose(rows.weights, 2.0 * (1.0 + np.abs(grad)))
     np.testing.assert_allclose(rows.lower, 0.0)
     assert rows.weights[0] > 10 * rows.weights[1]  # near-limit joint is the expensive one
+
+
+def test_two_value_point_is_rejected_on_a_spatial_model(rov):
+    with pytest.raises(ShapeError, match=r"tip\.position.*2 coordinates"):
+        EndEffectorTask(position=[1.0, 2.0], name="tip").bind(rov)
+    with pytest.raises(ShapeError, match=r"tip\.velocity"):
+        free = EndEffectorTask(name="tip")
+        free.set_target(position=[1.0, 2.0, 3.0], velocity=[0.1, 0.0])
+        free.bind(rov)
+    bound = EndEffectorTask(position=[1.0, 2.0, 3.0], name="tip").bind(rov)
+    with pytest.raises(ShapeError, match=r"tip\.position"):
+        bound.set_target(position=[1.0, 2.0])
+    with pytest.raises(InputError, match=r"tip\.position"):
+        bound.update(position=[1.0, 2.0])
+    pa10 = load_model("nenchev_pa10_arm")
+    with pytest.raises(ShapeError, match=r"tip\.position"):
+        EndEffectorTask(position=[1.0, 2.0], name="tip").bind(pa10)
+
+
+def test_two_value_point_on_a_planar_model_has_zero_depth(rov):
+    planar = load_model("soylu_planar")
+    state = planar.state(planar.neutral())
+    task = EndEffectorTask(position=[1.0, 2.0], name="tip").bind(planar)
+    expected = np.array([1.0, 2.0, 0.0]) - state.position("tool")
+    np.testing.assert_allclose(task.compute_error(state, 0.0), expected[:2])
+    task.set_target(position=[0.5, -0.5])
+    assert task.target(0.0)[0].tolist() == [0.5, -0.5, 0.0]
+    # a 2-value target replaced by a 3-value one no longer blocks a spatial bind
+    moving = EndEffectorTask(position=[1.0, 2.0], name="tip")
+    moving.set_target(position=[1.0, 2.0, 3.0])
+    moving.bind(rov)

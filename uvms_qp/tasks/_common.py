@@ -72,14 +72,38 @@ def as_rotation(value: Any, label: str) -> FloatArray:
     return R
 
 
-def as_point(value: Any, label: str) -> FloatArray:
-    """A 3-vector [m]; a planar 2-vector gets ``z = 0``."""
+def as_point(value: Any, label: str, vehicle_kind: str | None = None) -> FloatArray:
+    """A 3-vector [m] (or [m/s]), world frame; a 2-vector gets ``z = 0`` on planar models only.
+
+    Args:
+        value: 3 coordinates ``(x, y, z)``, or 2 coordinates ``(x, y)`` for a planar model.
+        label: Name of the argument, used in error messages.
+        vehicle_kind: Kind of the model the point is for (``"planar"``, ``"spatial"``,
+            ``"fixed"``), or None when it is not known yet (the caller re-checks at bind with
+            :func:`check_planar_point`).
+
+    Raises:
+        ShapeError: not 2 or 3 coordinates, or 2 coordinates for a non-planar model.
+    """
     p = as_vector(value, label)
     if p.shape[0] == 2:
+        check_planar_point(label, vehicle_kind)
         p = np.array([p[0], p[1], 0.0])
     if p.shape[0] != 3:
         raise ShapeError(f"{label}: expected 2 or 3 coordinates, got {p.shape[0]}")
     return p
+
+
+def check_planar_point(label: str, vehicle_kind: str | None) -> None:
+    """Reject a 2-coordinate point ``label`` unless the model is planar (or not known yet).
+
+    Raises:
+        ShapeError: ``vehicle_kind`` is known and not ``"planar"`` (the z coordinate would be
+            silently taken as 0 on a model that moves in 3-D).
+    """
+    if vehicle_kind is not None and vehicle_kind != "planar":
+        raise ShapeError(f"{label}: got 2 coordinates, but the model is {vehicle_kind}; "
+                         "give 3 (x, y, z) (2 are allowed only on planar models)")
 
 
 def joint_indices(model: Any, joints: Sequence[str] | None, label: str) -> np.ndarray:

@@ -9,7 +9,15 @@ import pinocchio as pin
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ._common import TWIST_AXES, as_point, as_rotation, check_frame, compact_index, parse_axes
+from ._common import (
+    TWIST_AXES,
+    as_point,
+    as_rotation,
+    check_frame,
+    check_planar_point,
+    compact_index,
+    parse_axes,
+)
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -87,6 +95,7 @@ class EndEffectorTask(ErrorTask):
         self._v_d = np.zeros(3)
         self._w_d = np.zeros(3)
         self._trajectory: Any = None
+        self._planar_points: set[str] = set()  # arguments given as (x, y), checked at bind
         self._sel = np.arange(0)
         self._need_p = mode != "orientation"
         self._need_o = mode != "position"
@@ -108,10 +117,12 @@ class EndEffectorTask(ErrorTask):
             angular_velocity: Feed-forward angular velocity (3,) [rad/s], world axes.
         """
         if position is not None:
-            self._p_d = as_point(position, f"{self.name}.position")
+            self._p_d = self._point(position, "position")
         if rotation is not None:
             self._R_d = as_rotation(rotation, f"{self.name}.rotation")
-        self._v_d = np.zeros(3) if velocity is None else as_point(velocity, f"{self.name}.velocity")
+        self._v_d = np.zeros(3) if velocity is None else self._point(velocity, "velocity")
+        if velocity is None:
+            self._planar_points.discard("velocity")
         self._w_d = (np.zeros(3) if angular_velocity is None
                      else as_vector(angular_velocity, f"{self.name}.angular_velocity", 3))
         self._trajectory = None
@@ -122,6 +133,17 @@ class EndEffectorTask(ErrorTask):
             raise InputError(f"{self.name}.trajectory: expected an object with sample(t), "
                              f"got {type(trajectory).__name__}")
         self._trajectory = trajectory
+        self._planar_points.clear()
+
+    def _point(self, value: Any, key: str) -> FloatArray:
+        """Validate a point argument; remember a 2-value one until the model kind is known."""
+        kind = None if self.model is None else self.model.vehicle_kind
+        p = as_point(value, f"{self.name}.{key}", kind)
+        if kind is None and np.size(value) == 2:
+            self._planar_points.add(key)
+        else:
+            self._planar_points.discard(key)
+        return p
 
     @property
     def has_target(self) -> bool:
@@ -163,6 +185,8 @@ class EndEffectorTask(ErrorTask):
     # ----------------------------------------------------------------------------------- binding
     def _bind(self, model: Model) -> int:
         check_frame(model, self.frame, f"{self.name}.frame")
+        for key in sorted(self._planar_points):
+            check_planar_point(f"{self.name}.{key}", model.vehicle_kind)
         if self._axes_arg is not None:
             axes = self._axes_arg
         elif model.vehicle_kind == "planar":
@@ -241,8 +265,9 @@ class EndEffectorTask(ErrorTask):
 
     def _apply_update(self, key: str, value: Any) -> None:
         if key == "position":
-            self._p_d = as_point(value, f"{self.name}.position")
+            self._p_d = self._point(value, "position")
             self._v_d = np.zeros(3)
+            self._planar_points.discard("velocity")
             self._trajectory = None
         elif key == "rotation":
             self._R_d = as_rotation(value, f"{self.name}.rotation")
