@@ -20,6 +20,7 @@ convex; results are measured, never trusted, in :mod:`uvms_qp.hqp.evaluate`.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -130,8 +131,12 @@ class CascadeBackend:
             Gs = sparse.csc_matrix(G) if G is not None else None
         try:
             problem = self._qpsolvers.Problem(Ps, q, Gs, h, None, None, lb, ub)
-            sol = self._qpsolvers.solve_problem(problem, solver=self.spec.qp_name,
-                                                **{**self.settings, **(extra or {})})
+            # Every answer is measured (and certified where the back-end is inexact) below, so the
+            # back-ends' own status warnings would only repeat what the result reports.
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                sol = self._qpsolvers.solve_problem(problem, solver=self.spec.qp_name,
+                                                    **{**self.settings, **(extra or {})})
         except TimeoutError:  # a deadline guard refused the QP: stop, no rescue either
             self._stopped = True
             return None, none
