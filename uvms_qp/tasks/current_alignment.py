@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
@@ -75,10 +75,13 @@ class CurrentAlignmentTask(ErrorTask):
     def compute_error(self, state: State, t: float) -> FloatArray:
         """``wrap(psi_c + offset - psi)`` [rad]."""
         if self.heading is None:
-            raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
-                             "direction=, or call update(heading=...)")
+            self._missing_heading()
         e = (self.heading + self.offset - float(state.eta[self._row]) + math.pi) % (2 * math.pi)
         return np.array((e - math.pi,))
+
+    def _missing_heading(self) -> NoReturn:
+        raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
+                         "direction=, or call update(heading=...)")
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Yaw row of the vehicle-pose Jacobian (1, nv)."""
@@ -90,9 +93,10 @@ class CurrentAlignmentTask(ErrorTask):
 
         The operations of :meth:`compute_error` in plain floats.
         """
-        if self.heading is None:
-            self.compute_error(state, t)  # raises the missing-heading error
-        e = (self.heading + self.offset - state.eta.item(self._row) + math.pi) % _TWO_PI
+        heading = self.heading
+        if heading is None:
+            self._missing_heading()
+        e = (heading + self.offset - state.eta.item(self._row) + math.pi) % _TWO_PI
         A[:] = state.vehicle_pose_jacobian()[self._row: self._row + 1]
         self._set_sides_floats([e - math.pi], lower, upper)
 
