@@ -78,10 +78,12 @@ def test_events_fire_at_their_step_and_series_follow(small):
                               "update": {"force": 5.0}}]
     moment = result.payload_moment
     assert np.all(moment[:3] == 0.0) and np.all(moment[3:] > 0.0)
-    # independent payload moment: (x^2 + y^2) F of the tool in the arm-base frame
+    # independent values from the tool in the arm-base frame: the Eq. (20) objective
+    # (x^2 + y^2) F [N m^2] and the physical moment F sqrt(x^2 + y^2) [N m]
     state = small.model.state(result.q[5])
     p = state.pose_in("tool", "arm_base")[:3, 3]
-    assert moment[5] == pytest.approx((p[0] ** 2 + p[1] ** 2) * 5.0, rel=1e-12)
+    assert result.payload_objective[5] == pytest.approx((p[0] ** 2 + p[1] ** 2) * 5.0, rel=1e-12)
+    assert moment[5] == pytest.approx(5.0 * np.hypot(p[0], p[1]), rel=1e-12)
     # the tool holds its initial position (rounded to 0.1 mm in the file)
     assert result.metrics()["ee_error_max"] < 1e-4
     assert result.metrics()["vehicle_displacement_max"] < 1e-9

@@ -11,8 +11,10 @@ commands for ``k = 0..N-1``), independently of the controller's own diagnostics:
 - ``joint_limit_violation_max`` [rad]: largest excursion of a joint beyond its limits (0 if none);
 - ``joint_margin_min`` [rad]: smallest distance of a joint to its nearest limit;
 - ``bound_violation_max``: largest violation of a hard row (box or inequality) by a command;
-- ``payload_moment_max`` [N m]: largest ``(x_E^2 + y_E^2) F`` (``003_229789978cc4b235.txt``,
-  Eq. (20)) when a payload is set;
+- ``payload_moment_max`` [N m]: largest moment of the payload about the arm base's vertical
+  axis, ``F sqrt(x_E^2 + y_E^2)``, when a payload is set (``_start``/``_final`` too);
+- ``payload_objective_max`` [N m^2]: largest ``(x_E^2 + y_E^2) F``, the objective of
+  ``003_229789978cc4b235.txt``, Eq. (20), that a payload task bounds or reduces;
 - ``step_time_median_us``, ``step_time_p99_us``: wall time of the controller step [us];
 - ``nan_steps``: steps whose command was not finite (replaced by zero).
 
@@ -104,6 +106,11 @@ def _window_metrics(
         metrics["payload_moment_max"] = _finite_max(moments)
         metrics["payload_moment_start"] = float(moments[0]) if moments.size else None
         metrics["payload_moment_final"] = float(moments[-1]) if moments.size else None
+    if result.payload_objective is not None:
+        objective = result.payload_objective[mask]
+        metrics["payload_objective_max"] = _finite_max(objective)
+        metrics["payload_objective_start"] = float(objective[0]) if objective.size else None
+        metrics["payload_objective_final"] = float(objective[-1]) if objective.size else None
     return metrics
 
 

@@ -122,9 +122,9 @@ def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
     if result.payload_moment is not None:
         fig, ax = plt.subplots(figsize=(8, 3.5))
         ax.plot(t, result.payload_moment)
-        ax.set_ylabel("payload moment [N m^2]")
+        ax.set_ylabel("payload moment [N m]")
         ax.set_xlabel("t [s]")
         _events(ax, result)
-        fig.suptitle(f"{result.scenario}: payload moment (x_E^2 + y_E^2) F")
+        fig.suptitle(f"{result.scenario}: payload moment F |(x_E, y_E)|")
         files.append(save(fig, out / "payload_moment.png"))
     return files

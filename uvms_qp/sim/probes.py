@@ -82,7 +82,9 @@ class Probes:
         self.ee_rotation = np.zeros((size, 3, 3))
         self.target_position = np.full((size, 3), np.nan)
         self.manipulability = np.zeros(size)
-        self.payload_moment = np.zeros(size) if self.payload_task is not None else None
+        has_payload = self.payload_task is not None
+        self.payload_objective = np.zeros(size) if has_payload else None
+        self.payload_moment = np.zeros(size) if has_payload else None
 
     def record(self, k: int, state: Any, t: float) -> None:
         """Record state ``k`` at time ``t`` [s]."""
@@ -103,11 +105,15 @@ class Probes:
         else:
             J = state.arm_jacobian("tool")[self.manipulability_rows]
             self.manipulability[k] = yoshikawa(J)
-        if self.payload_moment is not None:
-            self.payload_moment[k] = float(self.payload_task.compute_value(state)[0])
+        if self.payload_objective is not None and self.payload_moment is not None:
+            # Eq. (20) objective (x_E^2 + y_E^2) F [N m^2], and the physical moment F |(x_E, y_E)|
+            # [N m] = sqrt(objective * F).
+            objective = float(self.payload_task.compute_value(state)[0])
+            self.payload_objective[k] = objective
+            self.payload_moment[k] = float(np.sqrt(max(objective, 0.0) * self.payload_task.force))
 
     def arrays(self) -> dict[str, Any]:
-        """The recorded arrays by name (``yaw`` and ``payload_moment`` only when defined)."""
+        """The recorded arrays by name (``yaw`` and the payload series only when defined)."""
         data: dict[str, Any] = {
             "eta": self.eta,
             "joints": self.joints,
@@ -121,4 +127,5 @@ class Probes:
             data["yaw"] = self.eta[:, -1].copy()
         if self.payload_moment is not None:
             data["payload_moment"] = self.payload_moment
+            data["payload_objective"] = self.payload_objective
         return data

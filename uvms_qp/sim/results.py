@@ -6,7 +6,8 @@ scenario phase), ``events`` (applied run-time changes) and ``series``:
 
 - per state (N+1 entries, times ``time``): ``time`` [s], ``q``, ``vehicle_pose`` (eta [m, rad]),
   ``joints`` [rad], ``ee_pose`` (tracked frame ``[x, y, z, qx, qy, qz, qw]``, world),
-  ``target_position`` [m], ``manipulability``, ``payload_moment`` (when set);
+  ``target_position`` [m], ``manipulability``, ``payload_moment`` [N m] and
+  ``payload_objective`` [N m^2] (when set);
 - per step (N entries, at ``time[:N]``): ``zeta`` [m/s, rad/s] (names in ``zeta_names``),
   ``zeta_lower``/``zeta_upper`` (hard box, ``null`` = unbounded), ``step_time_us``, ``status``,
   ``level_residuals``, ``bound_violation``, ``task_residuals`` (by task name, units in
@@ -99,6 +100,8 @@ def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, 
         }
         if result.payload_moment is not None:
             record["payload_moment"] = result.payload_moment
+        if result.payload_objective is not None:
+            record["payload_objective"] = result.payload_objective
         data["series"] = record
     return _clean(data)  # type: ignore[no-any-return]
 

@@ -60,7 +60,8 @@ class SimulationResult:
         ee_rotation: Tracked frame rotation (N+1, 3, 3).
         target_position: Its target (N+1, 3) [m] (NaN where none).
         manipulability: Manipulability measure (N+1,).
-        payload_moment: Payload moment (N+1,) [N m], or None without a payload task.
+        payload_moment: Payload moment F |(x_E, y_E)| (N+1,) [N m], or None without a payload task.
+        payload_objective: Paper 003 Eq. (20) objective (x_E^2 + y_E^2) F (N+1,) [N m^2], or None.
         step_time: Controller step wall time (N,) [s].
         status: Controller status per step.
         level_residuals: Per-level residual norms (N, levels) (NaN where not reported).
@@ -101,6 +102,7 @@ class SimulationResult:
     target_position: FloatArray
     manipulability: FloatArray
     payload_moment: FloatArray | None
+    payload_objective: FloatArray | None
     step_time: FloatArray
     status: list[str]
     level_residuals: FloatArray
@@ -321,6 +323,7 @@ def simulate(
         target_position=data["target_position"],
         manipulability=data["manipulability"],
         payload_moment=data.get("payload_moment"),
+        payload_objective=data.get("payload_objective"),
         step_time=step_time,
         status=status,
         level_residuals=level_res,
