@@ -49,6 +49,27 @@ def test_nullspace_scheme_equals_hqp_without_active_bounds(rov, seed):
     np.testing.assert_allclose(qp.zeta, ns.zeta, atol=1e-6)
 
 
+@pytest.mark.parametrize("weight", [1e-20, 1e12])
+def test_nullspace_scheme_ignores_the_scale_of_a_level(rov, weight):
+    """Scaling all rows of a level by a weight leaves the priority solution unchanged: the rank
+    decision is relative to each level's own rows (a level of tiny weight is not dropped)."""
+    rng = np.random.default_rng(11)
+    q = rov.random_configuration(rng)
+    state = rov.state(q)
+    target = state.position("tool") + rng.normal(scale=0.1, size=3)
+    posture = list(rov.split(q)[1] + 0.1)
+
+    def stack(w):
+        return Stack(levels=[Level(EndEffectorTask(position=target, gain=1.5)),
+                             Level(PostureTask(posture=posture, gain=0.5, weight=w))])
+
+    plain = Controller(rov, stack(1.0), dt=0.05, scheme="nullspace").step(state)
+    scaled = Controller(rov, stack(weight), dt=0.05, scheme="nullspace").step(state)
+    qp = Controller(rov, stack(1.0), solver="daqp", dt=0.05).step(state)
+    np.testing.assert_allclose(plain.zeta, qp.zeta, atol=1e-6)
+    np.testing.assert_allclose(scaled.zeta, plain.zeta, atol=1e-8)
+
+
 def test_gradient_projection_identity_eq4():
     """Tracking level + manipulability ascend level = J^+ x_dot + (I - J^+ J) lambda grad w."""
     arm = load_model("nenchev_pa10_arm")

@@ -36,6 +36,7 @@ from ._validation import FloatArray, as_scalar, as_vector
 from .constraints.constraint import Constraint
 from .errors import BoundsError, InputError, NonFiniteError
 from .hqp import HierarchyResult, HierarchySolver, Status
+from .hqp.backends.nullspace import nullspace_solve
 from .hqp.evaluate import evaluate
 from .hqp.problem import Block, Problem
 from .hqp.rows import Rows
@@ -48,6 +49,11 @@ if TYPE_CHECKING:  # pragma: no cover
 
 Scheme = Literal["hqp", "weighted", "nullspace"]
 SCHEMES: tuple[str, ...] = ("hqp", "weighted", "nullspace")
+#: Rank decision of the ``"nullspace"`` scheme (see :func:`uvms_qp.hqp.backends.nullspace.
+#: nullspace_solve`): singular values of a projected level at or below
+#: ``max(NULLSPACE_ATOL, NULLSPACE_RCOND * |weighted rows of the level|_F)`` are dropped.
+NULLSPACE_RCOND = 1e-10
+NULLSPACE_ATOL = 0.0
 
 
 @dataclass(eq=False)
@@ -218,43 +224,6 @@ class StepResult:
             lines.append(f"  {self.hierarchy.message}")
         lines.extend(f"  rejected: {a}" for a in self.attempts)
         return "\n".join(lines)
-
-
-def nullspace_solve(problem: Problem, rtol: float = 1e-9) -> FloatArray:
-    r"""Closed-form recursive null-space solution of an equality hierarchy in the metric W.
-
-    Siciliano-Slotine recursion (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels,
-    weighted pseudoinverse of Eq. (17)); with ``u = W^(1/2) zeta``, ``Ã_k = D_k A_k W^(-1/2)``,
-    ``b̃_k = D_k b_k`` (``D_k`` the square roots of the row weights):
-
-        u_k = u_{k-1} + (Ã_k P_{k-1})^+ (b̃_k - Ã_k u_{k-1}),
-        P_k = P_{k-1} - (Ã_k P_{k-1})^+ Ã_k P_{k-1}.
-
-    The rank of each projected level is decided against the level's own unprojected size
-    (singular values below ``rtol * max(1, |Ã_k|)`` are dropped), so a level whose freedom is
-    used up by the levels above contributes nothing instead of amplifying round-off.
-    Inequality rows must have been removed; bounds are ignored.
-    """
-    n = problem.n
-    w_isqrt = 1.0 / np.sqrt(problem.W)
-    u = np.zeros(n)
-    P = np.eye(n)
-    for level in problem.levels:
-        if level.m == 0:
-            continue
-        d = np.sqrt(level.w)
-        At = (d[:, None] * level.A) * w_isqrt[None, :]
-        M = At @ P
-        U, sv, Vt = np.linalg.svd(M, full_matrices=False)
-        tol = rtol * max(1.0, float(np.abs(At).max()) * math.sqrt(n))
-        keep = sv > tol
-        if not keep.any():
-            continue
-        Mp = (Vt[keep].T / sv[keep]) @ U[:, keep].T
-        u = u + Mp @ (d * level.lo - At @ u)
-        P = P - Mp @ M
-        P = 0.5 * (P + P.T)
-    return w_isqrt * u
 
 
 class Controller:
@@ -570,7 +539,7 @@ class Controller:
         attempts: tuple[str, ...] = ()
         if self.scheme == "nullspace":
             t0 = time.perf_counter()
-            raw = nullspace_solve(problem)
+            raw = nullspace_solve(problem, NULLSPACE_RCOND, NULLSPACE_ATOL)
             zeta = np.minimum(np.maximum(raw, self._lower), self._upper)
             saturated = bool(np.any(zeta != raw))
             result = evaluate(problem, zeta, "nullspace", Status.OPTIMAL,
