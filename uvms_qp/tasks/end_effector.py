@@ -111,7 +111,8 @@ class EndEffectorTask(ErrorTask):
         """Set a fixed target (and optional feed-forward rates); stops tracking a trajectory.
 
         Args:
-            position: Target position (3,) [m], world frame (planar: 2 values allowed).
+            position: Target position (3,) [m], world frame (2 values ``(x, y)`` only on
+                planar models, where z = 0; a ShapeError on the others).
             rotation: Target rotation (3x3, orthonormal) or ``[roll, pitch, yaw]`` [rad].
             velocity: Feed-forward linear velocity (3,) [m/s] (default zero).
             angular_velocity: Feed-forward angular velocity (3,) [rad/s], world axes.
