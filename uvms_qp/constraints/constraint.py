@@ -13,6 +13,7 @@ from abc import ABC
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
@@ -104,3 +105,29 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r})"
+
+
+class SymmetricRateBox(Constraint):
+    """A static box ``-limit <= zeta[cols] <= limit`` on some columns of zeta.
+
+    Subclasses compute, in :meth:`_bind`, the columns ``_cols`` (int array) and the finite limits
+    ``_lim`` (same length, > 0) they bound; this class intersects them into the box.
+    """
+
+    has_box = True
+    is_static = True
+    _cols: NDArray[np.intp]
+    _lim: FloatArray
+
+    def _set_limits(self, cols: NDArray[np.intp], lim: FloatArray) -> None:
+        """Keep the columns whose limit is finite (an infinite limit leaves a column free)."""
+        finite = np.isfinite(lim)
+        self._cols = cols[finite]
+        self._lim = lim[finite]
+
+    def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
+        """Intersect ``[-limit, limit]`` into the box."""
+        cols = self._cols
+        lower[cols] = np.maximum(lower[cols], -self._lim)
+        upper[cols] = np.minimum(upper[cols], self._lim)
+

@@ -6,16 +6,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validation import FloatArray, as_scalar, as_vector
+from .._validation import as_scalar, as_vector
 from ..errors import InputError
 from ..tasks._common import check_joint_list, joint_indices
-from .constraint import Constraint
+from .constraint import SymmetricRateBox
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..model import Model, State
+    from ..model import Model
 
 
-class JointVelocityBounds(Constraint):
+class JointVelocityBounds(SymmetricRateBox):
     r"""Hard joint rate limits ``|qdot_i| <= scale * qdot_max,i`` [rad/s].
 
     Args:
@@ -28,8 +28,6 @@ class JointVelocityBounds(Constraint):
 
     type_name = "joint_velocity_bounds"
     unit = "rad/s"
-    has_box = True
-    is_static = True
 
     def __init__(self, *, limits: list[float] | None = None, scale: float = 1.0,
                  joints: list[str] | None = None, name: str | None = None) -> None:
@@ -52,14 +50,5 @@ class JointVelocityBounds(Constraint):
                 raise InputError(f"{self.name}.limits: expected {idx.size} values, got "
                                  f"{self._limits_arg.shape[0]}")
             lim = self._limits_arg
-        lim = self.scale * lim
-        finite = np.isfinite(lim)
-        self._cols = model.n_vehicle + idx[finite]
-        self._lim = lim[finite]
+        self._set_limits(model.n_vehicle + idx, self.scale * lim)
         return 0
-
-    def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
-        """Intersect ``[-limit, limit]`` into the box."""
-        cols = self._cols
-        lower[cols] = np.maximum(lower[cols], -self._lim)
-        upper[cols] = np.minimum(upper[cols], self._lim)

@@ -6,17 +6,17 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validation import FloatArray, as_scalar, as_vector
+from .._validation import as_scalar, as_vector
 from ..errors import InputError
-from .constraint import Constraint
+from .constraint import SymmetricRateBox
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..model import Model, State
+    from ..model import Model
 
 _LINEAR = ("u", "v", "w")
 
 
-class VehicleRateBounds(Constraint):
+class VehicleRateBounds(SymmetricRateBox):
     r"""Hard vehicle body-rate limits ``|nu_i| <= limit_i`` on the actuated DOFs.
 
     Limits come, in order of precedence, from ``limits`` (one per actuated DOF, in the model's
@@ -34,8 +34,6 @@ class VehicleRateBounds(Constraint):
 
     type_name = "vehicle_rate_bounds"
     unit = "m/s, rad/s"
-    has_box = True
-    is_static = True
 
     def __init__(self, *, linear: float | None = None, angular: float | None = None,
                  limits: list[float] | None = None, scale: float = 1.0,
@@ -66,14 +64,5 @@ class VehicleRateBounds(Constraint):
                 value = self.linear if dof in _LINEAR else self.angular
                 if value is not None:
                     lim[i] = value
-        lim = self.scale * lim
-        finite = np.isfinite(lim)
-        self._cols = np.flatnonzero(finite)
-        self._lim = lim[finite]
+        self._set_limits(np.arange(lim.shape[0]), self.scale * lim)
         return 0
-
-    def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
-        """Intersect ``[-limit, limit]`` into the box."""
-        cols = self._cols
-        lower[cols] = np.maximum(lower[cols], -self._lim)
-        upper[cols] = np.minimum(upper[cols], self._lim)
