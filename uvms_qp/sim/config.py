@@ -192,6 +192,15 @@ class Table:
             raise ConfigError(f"expected one of {listing}, got {value!r}", self.at(key))
         return value
 
+    def take_bool(self, key: str, default: bool = False) -> bool:
+        """Read a boolean (TOML ``true``/``false``; numbers and strings are errors)."""
+        value = self.raw(key)
+        if value is None:
+            return default
+        if not isinstance(value, bool):
+            raise ConfigError(f"expected a boolean, got {describe(value)}", self.at(key))
+        return value
+
     def take_numbers(
         self, key: str, default: list[float] | None = None, *, size: int | None = None,
         required: bool = False,

@@ -97,6 +97,9 @@ class Scenario:
         tracking: Name of the task whose target is the tool reference in the metrics, or None.
         phases: Named time windows with their own metrics.
         source: File the scenario came from, when any.
+        strict: The controller raises :class:`~uvms_qp.errors.NoSolutionFound` instead of
+            degrading when no back-end returns a verified solution (``docs/reliability.md``).
+        deadline: Wall-time budget of one controller step [s], or None for none.
     """
 
     name: str
@@ -118,6 +121,8 @@ class Scenario:
     phases: list[Phase] = field(default_factory=list)
     source: Path | None = None
     data: dict[str, Any] = field(default_factory=dict, repr=False)
+    strict: bool = False
+    deadline: float | None = None
 
     @property
     def steps(self) -> int:
@@ -141,11 +146,18 @@ class Scenario:
         raise UnknownNameError("task", name, [t.name for t in self.tasks()])
 
     def make_controller(self, solver: str | None = None) -> Any:
-        """Build a :class:`~uvms_qp.controller.Controller` for this scenario's stack."""
+        """Build a :class:`~uvms_qp.controller.Controller` for this scenario's stack.
+
+        The controller gets the scenario's ``dt``, ``metric``, ``strict`` and ``deadline``.
+
+        Args:
+            solver: Override of the scenario's solver.
+        """
         from ..controller import Controller
 
         return Controller(
-            self.model, self.stack, solver=solver or self.solver, dt=self.dt, metric=self.metric
+            self.model, self.stack, solver=solver or self.solver, dt=self.dt, metric=self.metric,
+            strict=self.strict, deadline=self.deadline,
         )
 
     @classmethod
@@ -167,6 +179,8 @@ class Scenario:
         tracking: str | None = None,
         name: str = "custom",
         description: str = "",
+        strict: bool = False,
+        deadline: float | None = None,
     ) -> Scenario:
         """Assemble a scenario in code (no file): the stack is bound to ``model`` here.
 
@@ -187,9 +201,11 @@ class Scenario:
                 task with a ``target`` method and a ``frame``.
             name: Scenario name.
             description: Free text.
+            strict: Raise instead of degrading when no back-end solves a step.
+            deadline: Wall-time budget of one controller step [s], or None.
 
         Raises:
-            InputError: invalid dt/duration/q0, or any error of the stack or controller.
+            InputError: invalid dt/duration/q0/deadline, or any error of the stack or controller.
         """
         from .._validation import as_scalar
 
@@ -215,6 +231,8 @@ class Scenario:
             schemes=["hqp"],
             tracking=tracking,
             phases=list(phases or []),
+            strict=bool(strict),
+            deadline=None if deadline is None else as_scalar(deadline, "deadline", positive=True),
         )
         if scenario.tracking is None:
             for task in scenario.tasks():
@@ -633,6 +651,8 @@ def scenario_from_dict(
             "duration",
         )
     solver = _check_solver(top)
+    strict = top.take_bool("strict", False)
+    deadline = top.take_number("deadline", None, positive=True)
     metric_list = top.take_numbers("metric", size=int(model.nv))
     metric = None
     if metric_list is not None:
@@ -694,6 +714,8 @@ def scenario_from_dict(
         phases=phases,
         source=source,
         data=data,
+        strict=strict,
+        deadline=deadline,
     )
     try:
         scenario.make_controller()
