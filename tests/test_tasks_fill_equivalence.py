@@ -1,0 +1,402 @@
+"""Every task's rows equal a first-principles evaluation, on every bundled model and mode.
+
+The reference side uses Pinocchio directly on a fresh ``Data`` (no :class:`State` caches) and
+numpy: frame poses and world-aligned Jacobians restricted to the columns of zeta, the Z-Y-X
+Euler angles of the vehicle, Fossen's ``J_eta`` (``003_229789978cc4b235.txt, Eq. (2)-(3)``),
+the SO(3) log and its Jacobian, Yoshikawa's measure with the trace form of its gradient
+(``000_7b5f597fe4e36aa4.txt, Eq. (18)-(19)``), the joint-limit index
+(``003_229789978cc4b235.txt, Eq. (15)-(16)``) and the payload moment (Eq. (20)-(21)). Tasks run
+over several ticks, so run-time memory (activation set points, ``w_dot``) is covered too.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from uvms_qp.model import bundled_models, load_model
+from uvms_qp.tasks import (
+    CurrentAlignmentTask,
+    EndEffectorTask,
+    JointLimitTask,
+    ManipulabilityTask,
+    PayloadMomentTask,
+    PostureTask,
+    StationKeepingTask,
+    VehicleAttitudeTask,
+    VehicleMotionTask,
+)
+from uvms_qp.tasks.joint_limit import LIMIT_CLEARANCE
+from uvms_qp.tasks.manipulability import shaping_function
+
+MODELS = {name: load_model(name) for name in bundled_models()}
+TICKS = 6
+DT = 0.1
+RTOL = 1e-10
+_TWIST = ("x", "y", "z", "rx", "ry", "rz")
+_PIN_VELOCITY = {"spatial": "uvwpqr", "planar": "uvr", "fixed": ""}
+
+
+# ------------------------------------------------------------------------ reference kinematics
+class Ref:
+    """Kinematics of one configuration straight from Pinocchio (fresh Data) and numpy."""
+
+    def __init__(self, model, q):
+        self.model = model
+        pm = model.pin_model
+        data = pm.createData()
+        pin.computeJointJacobians(pm, data, q)
+        pin.updateFramePlacements(pm, data)
+        self.pm, self.data, self.q = pm, data, q
+        order = _PIN_VELOCITY[model.vehicle_kind]
+        nvp = len(order)
+        self.cols = [order.index(a) for a in model.actuated] + [
+            nvp + j for j in range(model.n_joints)]
+        self.joints = q[model.nq_vehicle:]
+        self.eta = self._eta()
+
+    def pose(self, frame):
+        return self.data.oMf[self.model.frame_id(frame)].homogeneous.copy()
+
+    def jacobian(self, frame):
+        J = pin.getFrameJacobian(self.pm, self.data, self.model.frame_id(frame),
+                                 pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        return J[:, self.cols]
+
+    def arm_jacobian(self, frame="tool"):
+        """Twist of ``frame`` over the joint rates, vehicle still, in arm-base axes."""
+        R = self.pose("arm_base")[:3, :3]
+        J = self.jacobian(frame)[:, self.model.n_vehicle:]
+        return np.vstack([R.T @ J[:3], R.T @ J[3:]])
+
+    def _eta(self):
+        kind, q = self.model.vehicle_kind, self.q
+        if kind == "spatial":
+            R = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+            return np.concatenate([q[:3], pin.rpy.matrixToRpy(R)])
+        if kind == "planar":
+            return np.array([q[0], q[1], math.atan2(q[3], q[2])])
+        return np.zeros(0)
+
+    def eta_jacobian(self):
+        """Fossen's ``J_eta`` over zeta (actuated vehicle columns; joint columns zero)."""
+        m, eta = self.model, self.eta
+        if m.vehicle_kind == "planar":
+            c, s = math.cos(eta[2]), math.sin(eta[2])
+            full = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        else:
+            phi, theta, psi = eta[3:]
+            sp, cp, ct, tt = math.sin(phi), math.cos(phi), math.cos(theta), math.tan(theta)
+            T = np.array([[1.0, sp * tt, cp * tt], [0.0, cp, -sp], [0.0, sp / ct, cp / ct]])
+            full = np.zeros((6, 6))
+            full[:3, :3] = pin.rpy.rpyToMatrix(phi, theta, psi)
+            full[3:, 3:] = T
+        order = _PIN_VELOCITY[m.vehicle_kind]
+        J = np.zeros((m.eta_size, m.nv))
+        J[:, : m.n_vehicle] = full[:, [order.index(a) for a in m.actuated]]
+        return J
+
+
+def wrap(a):
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def eta_names(model):
+    return {"planar": ["x", "y", "psi"], "spatial": ["x", "y", "z", "phi", "theta", "psi"]}.get(
+        model.vehicle_kind, [])
+
+
+def joint_selector(model, idx):
+    S = np.zeros((len(idx), model.nv))
+    S[np.arange(len(idx)), model.n_vehicle + np.asarray(idx, dtype=int)] = 1.0
+    return S
+
+
+def manipulability(J6, rows):
+    """``w = sqrt(det(J_S J_S^T))`` and ``dw/dq_i = w trace(dJ_S/dq_i J_S^+)`` (Eq. (18)-(19))."""
+    Js = J6[rows]
+    k, n = Js.shape
+    G = Js @ Js.T if k <= n else Js.T @ Js
+    w = math.sqrt(max(np.linalg.det(G), 0.0))
+    pinv = np.linalg.pinv(Js)
+    V, W = J6[:3], J6[3:]
+    grad = np.zeros(n)
+    for i in range(n):
+        dJ = np.zeros((6, n))
+        for j in range(n):
+            if i <= j:
+                dJ[:3, j] = np.cross(W[:, i], V[:, j])
+                dJ[3:, j] = np.cross(W[:, i], W[:, j])
+            else:
+                dJ[:3, j] = np.cross(W[:, j], V[:, i])
+        grad[i] = w * np.trace(dJ[rows] @ pinv)
+    return w, grad
+
+
+# ------------------------------------------------------------------------- reference rows
+class Line:
+    """A straight-line trajectory; with ``spin`` also a rotation about a fixed world axis."""
+
+    def __init__(self, start, velocity, spin=None):
+        self.p0, self.v = np.asarray(start, float), np.asarray(velocity, float)
+        self.spin = None if spin is None else np.asarray(spin, float)
+        self.duration = 10.0
+
+    def sample(self, t):
+        class Sample:
+            pass
+
+        s = Sample()
+        s.position, s.velocity = self.p0 + t * self.v, self.v.copy()
+        if self.spin is None:
+            s.rotation = s.angular_velocity = None
+        else:
+            s.rotation = pin.exp3(t * self.spin) @ pin.rpy.rpyToMatrix(0.2, -0.1, 0.4)
+            s.angular_velocity = self.spin.copy()
+        return s
+
+
+def ref_end_effector(task, ref, t, memory):
+    traj = task._trajectory
+    p_d, v_d, R_d, w_d = task._p_d, np.zeros(3), task._R_d, np.zeros(3)
+    if traj is not None:
+        s = traj.sample(t)
+        p_d, v_d = s.position, s.velocity
+        if s.rotation is not None:
+            R_d, w_d = s.rotation, s.angular_velocity
+    J6 = ref.jacobian(task.frame)
+    T = ref.pose(task.frame)
+    e = np.zeros(6)
+    ff = np.zeros(6)
+    A = J6.copy()
+    if task.mode != "orientation":
+        e[:3] = p_d - T[:3, 3]
+        ff[:3] = v_d
+    if task.mode != "position":
+        R_e = R_d @ T[:3, :3].T
+        Jl = pin.Jlog3(R_e)
+        e[3:] = pin.log3(R_e)
+        ff[3:] = Jl.T @ w_d
+        A[3:] = Jl @ J6[3:]
+    sel = [_TWIST.index(a) for a in task.axes]
+    return A[sel], np.multiply(task.gain, e[sel]) + ff[sel], None
+
+
+def ref_station_keeping(task, ref, t, memory):
+    idx = [eta_names(ref.model).index(a) for a in task.axes]
+    eta = ref.eta[idx]
+    if task._target_arg is not None:
+        target = np.asarray(task._target_arg, float)
+    elif task.hold == "current":
+        target = eta
+    else:
+        target = memory.setdefault("activation", eta.copy())
+    e = target - eta
+    for i, a in enumerate(task.axes):
+        if a in ("phi", "theta", "psi"):
+            e[i] = wrap(e[i])
+    if task.blend is not None:
+        w, _ = manipulability(ref.arm_jacobian(), [0, 1] if ref.model.vehicle_kind == "planar"
+                              else [0, 1, 2])
+        e = e * (1.0 - shaping_function(w, task._blend_task.threshold))
+    return ref.eta_jacobian()[idx], np.multiply(task.gain, e), None
+
+
+def ref_current_alignment(task, ref, t, memory):
+    i = eta_names(ref.model).index("psi")
+    e = wrap(task.heading + task.offset - ref.eta[i])
+    return ref.eta_jacobian()[[i]], np.multiply(task.gain, [e]), None
+
+
+def ref_vehicle_attitude(task, ref, t, memory):
+    idx = [eta_names(ref.model).index(a) for a in task.axes]
+    target = np.array([task.roll if a == "phi" else task.pitch for a in task.axes])
+    e = np.array([wrap(x) for x in target - ref.eta[idx]])
+    return ref.eta_jacobian()[idx], np.multiply(task.gain, e), None
+
+
+def ref_posture(task, ref, t, memory):
+    idx = [ref.model.joint_names.index(j) for j in task.joints] if task.joints else list(
+        range(ref.model.n_joints))
+    q = ref.joints[idx]
+    if task._posture_arg is not None:
+        q_ref = np.asarray(task._posture_arg, float)
+    else:
+        q_ref = memory.setdefault("activation", q.copy())
+    return joint_selector(ref.model, idx), np.multiply(task.gain, q_ref - q), None
+
+
+def ref_manipulability(task, ref, t, memory):
+    m = ref.model
+    rows = [_TWIST.index(a) for a in task.axes]
+    w, g = manipulability(ref.arm_jacobian(task.frame), rows)
+    if task.mode == "floor":
+        A = np.zeros((1, m.nv))
+        A[0, m.n_vehicle:] = g
+        return A, np.array([task.gain * (task.minimum - w)]), np.array([np.inf])
+    scale = task.gain
+    if task.mode == "shaping":
+        prev = memory.get("prev")
+        w_dot = memory.get("w_dot", 0.0)
+        if prev is not None and t > prev[0]:
+            w_dot = (w - prev[1]) / (t - prev[0])
+        memory["prev"], memory["w_dot"] = (t, w), w_dot
+        scale *= shaping_function(w, task.threshold) * (0.0 if w_dot > 0.0 else 1.0)
+    return joint_selector(m, range(m.n_joints)), scale * g, None
+
+
+def ref_joint_limit(task, ref, t, memory):
+    m = ref.model
+    idx = list(task.joint_indices)
+    lo, hi, q = m.joint_lower[idx], m.joint_upper[idx], ref.joints[idx]
+    A = joint_selector(m, idx)
+    if task.mode == "margin":
+        return A, task.gain * (lo + task.margin - q), task.gain * (hi - task.margin - q)
+    C = np.broadcast_to(np.asarray(task._strength_arg, float), q.shape)
+    span = hi - lo
+    a = np.maximum(hi - q, LIMIT_CLEARANCE * span)
+    b = np.maximum(q - lo, LIMIT_CLEARANCE * span)
+    g = span**2 * (2.0 * q - hi - lo) / (C * a**2 * b**2)
+    if task.mode == "damping":
+        memory["weights"] = task.weight * (1.0 + np.abs(g))
+        return A, np.zeros(len(idx)), None
+    scale = -task.gain
+    if task.normalize:
+        scale /= np.linalg.norm(g)
+    return A, scale * g, None
+
+
+def ref_payload(task, ref, t, memory):
+    m = ref.model
+    T_b, T_e = ref.pose("arm_base"), ref.pose(task.frame)
+    x, y, _ = T_b[:3, :3].T @ (T_e[:3, 3] - T_b[:3, 3])
+    Ja = ref.arm_jacobian(task.frame)
+    F = task.force
+    g = 2.0 * F * (x * Ja[0] + y * Ja[1])
+    M = (x * x + y * y) * F
+    if task.mode == "bound":
+        A = np.zeros((1, m.nv))
+        A[0, m.n_vehicle:] = g
+        return A, np.array([-np.inf]), np.array([task.gain * (task.maximum - M)])
+    scale = -task.gain
+    if task.normalize:
+        scale /= np.linalg.norm(g)
+    return joint_selector(m, range(m.n_joints)), scale * g, None
+
+
+def ref_vehicle_motion(task, ref, t, memory):
+    m = ref.model
+    k = m.nv if task.include_arm else m.n_vehicle
+    return np.eye(k, m.nv), np.zeros(k), None
+
+
+REFERENCES = {
+    EndEffectorTask: ref_end_effector,
+    StationKeepingTask: ref_station_keeping,
+    CurrentAlignmentTask: ref_current_alignment,
+    VehicleAttitudeTask: ref_vehicle_attitude,
+    PostureTask: ref_posture,
+    ManipulabilityTask: ref_manipulability,
+    JointLimitTask: ref_joint_limit,
+    PayloadMomentTask: ref_payload,
+    VehicleMotionTask: ref_vehicle_motion,
+}
+
+P = [0.5, 0.1, 0.2]
+CASES = {
+    "ee_position": lambda m: EndEffectorTask(position=P, gain=2.0),
+    "ee_position_traj": lambda m: EndEffectorTask(trajectory=Line(P, [0.1, -0.2, 0.05]),
+                                                  gain=2.0),
+    "ee_position_axes": lambda m: EndEffectorTask(axes=["y", "x"], position=P, gain=[1.0, 3.0]),
+    "ee_orientation": lambda m: EndEffectorTask(mode="orientation", rotation=[0.1, 0.2, 0.3],
+                                                gain=1.5),
+    "ee_orientation_rz": lambda m: EndEffectorTask(mode="orientation", axes=["rz"],
+                                                   rotation=[0.1, 0.2, 0.3]),
+    "ee_pose": lambda m: EndEffectorTask(mode="pose", position=P, rotation=[0.1, 0.2, 0.3]),
+    "ee_pose_traj": lambda m: EndEffectorTask(
+        mode="pose", trajectory=Line(P, [0.1, 0.0, 0.2], spin=[0.1, 0.0, -0.3])),
+    "ee_pose_axes": lambda m: EndEffectorTask(mode="pose", axes=["y", "rz", "x"], position=P,
+                                              rotation=[0.3, -0.2, 1.0], gain=[1.0, 2.0, 3.0]),
+    "manip_ascend": lambda m: ManipulabilityTask(mode="ascend", gain=0.5),
+    "manip_floor": lambda m: ManipulabilityTask(mode="floor", minimum=0.002, gain=2.0),
+    "manip_shaping": lambda m: ManipulabilityTask(mode="shaping", threshold=0.5, gain=0.7),
+    "manip_rows": lambda m: ManipulabilityTask(mode="ascend", axes=["x", "y", "rz"]),
+    "manip_twist": lambda m: ManipulabilityTask(mode="floor", axes=list(_TWIST), minimum=1e-6),
+    "jl_gradient": lambda m: JointLimitTask(mode="gradient", gain=0.3),
+    "jl_normalized": lambda m: JointLimitTask(mode="gradient", normalize=True, strength=2.0),
+    "jl_margin": lambda m: JointLimitTask(mode="margin", margin=0.1, gain=2.0),
+    "jl_damping": lambda m: JointLimitTask(mode="damping", weight=2.0),
+    "payload_reduce": lambda m: PayloadMomentTask(force=10.0, gain=0.5),
+    "payload_normalized": lambda m: PayloadMomentTask(force=10.0, normalize=True),
+    "payload_bound": lambda m: PayloadMomentTask(mode="bound", force=5.0, maximum=0.3),
+    "posture": lambda m: PostureTask(gain=0.2),
+    "posture_subset": lambda m: PostureTask(
+        reference="middle", joints=[m.joint_names[-1], m.joint_names[0]], gain=[0.1, 0.3]),
+    "station_hold": lambda m: StationKeepingTask(gain=1.0),
+    "station_current": lambda m: StationKeepingTask(hold="current"),
+    "station_target": lambda m: StationKeepingTask(axes=["psi", "x"], target=[3.1, 0.2],
+                                                   gain=[1.0, 2.0]),
+    "current_alignment": lambda m: CurrentAlignmentTask(heading=0.78, gain=0.5),
+    "current_direction": lambda m: CurrentAlignmentTask(direction=[1.0, -2.0], offset=3.0),
+    "attitude": lambda m: VehicleAttitudeTask(gain=[1.0, 2.0]),
+    "attitude_pitch": lambda m: VehicleAttitudeTask(axes=["theta"], pitch=0.1),
+    "vehicle_motion": lambda m: VehicleMotionTask(beta=0.8),
+    "vehicle_motion_only": lambda m: VehicleMotionTask(include_arm=False),
+}
+
+
+def _bind_or_skip(make, model):
+    try:
+        return make(model).bind(model)
+    except Exception as exc:  # the mode does not apply to this model (no arm, no roll, ...)
+        pytest.skip(f"not applicable: {exc}")
+
+
+def _configurations(model, seed):
+    rng = np.random.default_rng(seed)
+    return [model.random_configuration(rng) for _ in range(TICKS)]
+
+
+def _check(task, model, qs, extra=None):
+    reference = REFERENCES[type(task)]
+    memory: dict = {}
+    for k, q in enumerate(qs):
+        t = DT * k
+        state = model.state(q)
+        if extra is not None:
+            extra.rows(state, t)
+        rows = task.rows(state, t)
+        A, lo, hi = reference(task, Ref(model, q), t, memory)
+        hi = lo if hi is None else hi
+        scale = 1.0 + np.abs(A).max()
+        np.testing.assert_allclose(rows.A, A, rtol=RTOL, atol=RTOL * scale)
+        for got, want in ((rows.lower, lo), (rows.upper, hi)):
+            np.testing.assert_allclose(got, want, rtol=RTOL, atol=RTOL * (1.0 + np.abs(
+                want[np.isfinite(want)]).max(initial=0.0)))
+        if "weights" in memory:
+            np.testing.assert_allclose(rows.weights, memory["weights"], rtol=RTOL)
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.parametrize("model_name", sorted(MODELS))
+def test_rows_equal_the_first_principles_rows(model_name, case):
+    model = MODELS[model_name]
+    task = _bind_or_skip(CASES[case], model)
+    _check(task, model, _configurations(model, seed=hash(case) % 1000))
+
+
+@pytest.mark.parametrize("model_name", ["bluerov2_heavy_alpha5", "wang_9dof", "soylu_planar"])
+def test_blended_station_keeping_reads_the_shaping_task_of_the_same_tick(model_name):
+    """The blended demand ``(1 - k(w)) K e`` with ``w`` of the same state (shared per tick)."""
+    model = MODELS[model_name]
+    shaping = ManipulabilityTask(mode="shaping", threshold=0.5, name="shape").bind(model)
+    station = StationKeepingTask(blend="shape", gain=0.5).bind(model)
+    station.link({"shape": shaping, station.name: station})
+    qs = _configurations(model, seed=5)
+    _check(station, model, qs, extra=shaping)
+    shaping.reset()
+    station.reset()
+    _check(station, model, qs)  # station keeping evaluated alone also computes w itself
