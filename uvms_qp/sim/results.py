@@ -11,7 +11,12 @@ scenario phase), ``events`` (applied run-time changes) and ``series``:
 - per step (N entries, at ``time[:N]``): ``zeta`` [m/s, rad/s] (names in ``zeta_names``),
   ``zeta_lower``/``zeta_upper`` (hard box, ``null`` = unbounded), ``step_time_us``, ``status``,
   ``level_residuals``, ``bound_violation``, ``task_residuals`` (by task name, units in
-  ``task_units``).
+  ``task_units``), ``stage`` (fallback stage that produced the command, ``"primary"`` on the
+  happy path; :data:`uvms_qp.safety.STAGES`), ``clipped`` (amount the final saturation removed
+  [m/s, rad/s]) and ``deadline_missed`` (booleans).
+
+``metrics`` also holds ``stage_counts`` (steps per stage), ``deadline_missed_steps`` and
+``clipped_max``.
 
 Non-finite numbers are written as ``null`` (strict JSON). The file is written atomically (a
 temporary file renamed into place), so a failed run never leaves a partial ``results.json``.
@@ -97,6 +102,9 @@ def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, 
             "bound_violation": result.bound_violation,
             "task_residuals": result.task_residuals,
             "task_units": result.task_units,
+            "stage": result.stage,
+            "clipped": result.clipped,
+            "deadline_missed": result.deadline_missed,
         }
         if result.payload_moment is not None:
             record["payload_moment"] = result.payload_moment

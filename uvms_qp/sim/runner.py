@@ -6,8 +6,10 @@ Each control step ``k`` at ``t_k = k dt``:
 2. build the :class:`~uvms_qp.model.State` of ``q_k`` (kinematics computed once);
 3. ``zeta_k = scheme.step(state, t_k).zeta`` (the HQP controller or any scheme with the same
    ``step``/``reset`` interface); a non-finite command is counted and replaced by zero;
-4. record the series and check the command against every hard row of the stack's constraints,
-   recomputed independently of the controller;
+4. record the series (with the fallback stage that produced the command, the amount the final
+   saturation clipped and whether the step missed its deadline: three plain Python values per
+   step) and check the command against every hard row of the stack's constraints, recomputed
+   independently of the controller;
 5. ``q_{k+1} = integrator.step(q_k, zeta_k, dt)`` on the configuration manifold.
 
 The result keeps plain numpy arrays; :mod:`uvms_qp.sim.metrics` turns them into numbers and
@@ -25,6 +27,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..errors import InputError
+from ..safety import STAGES
 from .probes import Probes
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -32,6 +35,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Runs expected to take longer than this [s] of wall time show a progress bar (when asked to).
 PROGRESS_AFTER = 2.0
+#: Stage recorded for a scheme whose results carry none (it has no fallback ladder).
+PRIMARY_STAGE = STAGES[0]
 
 
 @dataclass
@@ -78,6 +83,11 @@ class SimulationResult:
         wall_time: Wall time of the whole run [s].
         phases: Scenario phases, name -> (start, end) [s].
         level_names: Label of each level (its task names).
+        stage: Fallback stage that produced each command (N,) (:data:`uvms_qp.safety.STAGES`;
+            ``"primary"`` on the happy path and for schemes without a fallback ladder).
+        clipped: Amount the controller's final saturation removed from each command (N,)
+            [m/s, rad/s] (0 for schemes that do not report it).
+        deadline_missed: Whether each step overran the controller's ``deadline`` (N,).
     """
 
     scenario: str
@@ -119,12 +129,37 @@ class SimulationResult:
     wall_time: float = 0.0
     phases: dict[str, tuple[float, float]] = field(default_factory=dict)
     level_names: list[str] = field(default_factory=list)
+    stage: list[str] = field(default_factory=list)
+    clipped: FloatArray = field(default_factory=lambda: np.zeros(0))
+    deadline_missed: list[bool] = field(default_factory=list)
 
     def metrics(self) -> dict[str, Any]:
-        """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`)."""
+        """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`) and the fallback ones.
+
+        Added to the simulator's metrics: ``stage_counts`` (steps per fallback stage, in ladder
+        order, stages that occurred only), ``deadline_missed_steps`` and ``clipped_max``
+        [m/s, rad/s] (largest amount the final saturation removed from a command).
+        """
         from .metrics import compute_metrics
 
-        return compute_metrics(self)
+        metrics = compute_metrics(self)
+        metrics.update(self.fallback_metrics())
+        return metrics
+
+    def fallback_metrics(self) -> dict[str, Any]:
+        """``stage_counts``, ``deadline_missed_steps`` and ``clipped_max`` of the run."""
+        counts: dict[str, int] = {}
+        for stage in self.stage:
+            counts[stage] = counts.get(stage, 0) + 1
+        order = {name: i for i, name in enumerate(STAGES)}
+        ordered = dict(sorted(counts.items(), key=lambda item: (order.get(item[0], len(order)),
+                                                                 item[0])))
+        clipped = self.clipped[np.isfinite(self.clipped)]
+        return {
+            "stage_counts": ordered,
+            "deadline_missed_steps": int(sum(self.deadline_missed)),
+            "clipped_max": float(clipped.max()) if clipped.size else 0.0,
+        }
 
     def phase_metrics(self) -> dict[str, dict[str, Any]]:
         """Metrics of every scenario phase, by phase name."""
@@ -239,6 +274,9 @@ def simulate(
     q_log = np.zeros((n + 1, nq))
     step_time = np.zeros(n)
     status: list[str] = []
+    stage: list[str] = []
+    clipped = np.zeros(n)
+    missed: list[bool] = []
     level_res = np.full((n, n_levels), np.nan)
     task_names = [task.name for task in scenario.tasks()]
     task_res = {name: np.full(n, np.nan) for name in task_names}
@@ -276,6 +314,9 @@ def simulate(
         zeta_log[k] = zeta
         step_time[k] = float(getattr(result, "step_time", float("nan")))
         status.append(str(getattr(result, "status", "")))
+        stage.append(str(getattr(result, "stage", PRIMARY_STAGE)))
+        clipped[k] = getattr(result, "clipped", 0.0)
+        missed.append(bool(getattr(result, "deadline_missed", False)))
         hierarchy = getattr(result, "hierarchy", None)
         residuals = getattr(hierarchy, "level_residuals", None)
         if residuals is not None:
@@ -341,4 +382,7 @@ def simulate(
         phases={p.name: (p.start, p.end) for p in getattr(scenario, "phases", [])},
         level_names=[", ".join(task.name for task in level.tasks)
                      for level in scenario.stack.levels],
+        stage=stage,
+        clipped=clipped,
+        deadline_missed=missed,
     )
