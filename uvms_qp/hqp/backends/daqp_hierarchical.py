@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from ..evaluate import hard_feasible, hard_scale, polish_hard
+from ..inplace import new_daqp_model
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
@@ -98,6 +99,11 @@ class DaqpHierarchicalBackend:
     def reset(self) -> None:
         """Forget the DAQP model (the next call sets it up afresh: a cold start)."""
         self._key = None
+
+    @property
+    def daqp_settings(self) -> dict[str, Any]:
+        """The DAQP settings every set-up applies (registry values merged with the options)."""
+        return dict(self._daqp_settings)
 
     # ---------------------------------------------------------------------------- workspace
     def workspace(self, n: int, hard_rows: int, sizes: tuple[int, ...]) -> Workspace:
@@ -184,7 +190,7 @@ class DaqpHierarchicalBackend:
         self._sense = sense
         H, f = np.diag(W), np.zeros(n)
         self._held = (H, f, bp, ws)  # arrays handed to DAQP stay alive with the model
-        self._model = self._daqp.Model()
+        self._model = new_daqp_model()
         flag = int(self._model.setup(H, f, ws.daqp_A, ws.bu, ws.bl, sense, break_points=bp)[0])
         if flag >= 0:
             settings = self._model.settings
