@@ -36,9 +36,12 @@ from ._validation import FloatArray, as_scalar, as_vector
 from .constraints.constraint import Constraint
 from .errors import BoundsError, InputError, NonFiniteError
 from .hqp import HierarchyResult, HierarchySolver, Status
+from .hqp.backends.daqp_hierarchical import DaqpHierarchicalBackend
 from .hqp.backends.nullspace import nullspace_solve
 from .hqp.evaluate import evaluate
+from .hqp.inplace import InPlaceDaqp
 from .hqp.problem import Block, Problem
+from .hqp.result import StackedResult
 from .hqp.rows import Rows
 from .safety.fallback import PRIMARY, SafeSolver, default_alternate
 from .stack import Stack
@@ -304,10 +307,28 @@ class Controller:
         levels = self.stack.levels
         tasks: list[Task] = [t for level in levels for t in level]
         total = sum(t.dim for t in tasks)
-        self._A = np.zeros((total, nv))
-        self._lo = np.zeros(total)
-        self._hi = np.zeros(total)
-        self._w = np.ones(total)
+        row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
+        mh = sum(c.rows_dim for c in row_cons)
+        self._inplace = self._make_inplace(mh, [sum(t.dim for t in level) for level in levels])
+        if self._inplace is not None:
+            # every row and side is written straight into the in-place solver's stacked buffers
+            ws, head = self._inplace.ws, self._inplace.ws.head
+            self._A = ws.A[head:]
+            self._lo, self._hi = self._inplace.lo[head:], self._inplace.hi[head:]
+            self._w = self._inplace.w
+            self._HA = ws.A[nv:head]
+            self._Hlo, self._Hhi = self._inplace.lo[nv:head], self._inplace.hi[nv:head]
+            self._lower, self._upper = self._inplace.lo[:nv], self._inplace.hi[:nv]
+        else:
+            self._A = np.zeros((total, nv))
+            self._lo = np.zeros(total)
+            self._hi = np.zeros(total)
+            self._w = np.ones(total)
+            self._HA = np.zeros((mh, nv))
+            self._Hlo = np.zeros(mh)
+            self._Hhi = np.zeros(mh)
+            self._lower = np.zeros(nv)
+            self._upper = np.zeros(nv)
         self._slots: list[tuple[Task, FloatArray, FloatArray, FloatArray]] = []
         self._task_slices: list[slice] = []
         self._weight_refs: list[FloatArray | None] = []
@@ -330,12 +351,7 @@ class Controller:
         self._equality_tasks = np.array([t.equality_rows for t in tasks], dtype=bool)
         self._row_is_equality = np.zeros(total, dtype=bool)  # refreshed every tick
         # hard rows
-        row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
         box_cons = [c for c in self.stack.constraints if c.has_box]
-        mh = sum(c.rows_dim for c in row_cons)
-        self._HA = np.zeros((mh, nv))
-        self._Hlo = np.zeros(mh)
-        self._Hhi = np.zeros(mh)
         self._row_slots: list[tuple[Constraint, FloatArray, FloatArray, FloatArray]] = []
         r = 0
         for c in row_cons:
@@ -349,8 +365,8 @@ class Controller:
         for c in box_cons:
             if c.is_static:
                 c.fill_box(None, self.dt, self._static_lower, self._static_upper)  # type: ignore[arg-type]
-        self._lower = self._static_lower.copy()
-        self._upper = self._static_upper.copy()
+        self._lower[:] = self._static_lower
+        self._upper[:] = self._static_upper
         if (self._lower > self._upper).any():
             self._raise_empty_box(None)
         self._hard_eq = np.zeros(mh, dtype=bool)
@@ -362,6 +378,24 @@ class Controller:
         self._task_names = tuple(t.name for t in tasks)
         self._rate_units = tuple(t.rate_unit for t in tasks)
         self._error_units = tuple(t.error_unit for t in tasks)
+
+    def _make_inplace(self, hard_rows: int, sizes: list[int]) -> InPlaceDaqp | None:
+        """The in-place DAQP solver of the primary stage, for ``scheme="hqp"`` with ``"daqp"``.
+
+        Uses the primary back-end's settings and tolerances (deadline limits included); None
+        for every other scheme and solver (their steps take the general path). The path is
+        the primary back-end's own: it is used only while that back-end is in place (a
+        wrapped or replaced back-end, e.g. :func:`uvms_qp.safety.faults.inject`, is called
+        through the general path).
+        """
+        backend = getattr(self._solver, "_backend", None)
+        self._inplace_backend = backend
+        if self.scheme != "hqp" or not isinstance(backend, DaqpHierarchicalBackend) or (
+                not backend.lean):
+            return None
+        return InPlaceDaqp(self.nv, hard_rows, sizes, self.metric, backend.daqp_settings,
+                           level_tol=self._solver.level_tol, hard_tol=self._solver.hard_tol,
+                           name=self.solver_name)
 
     def _make_problem(self) -> Problem:
         """Problem whose blocks are views of the row buffers (filled in place every tick)."""
@@ -444,6 +478,8 @@ class Controller:
         self.stack.reset()
         if self._safe is not None:
             self._safe.reset()
+        if self._inplace is not None:
+            self._inplace.reset()
 
     def level_rows(self, state: State, t: float = 0.0) -> list[Rows]:
         """Rows of every level at ``(state, t)`` (fresh copies; for inspection and tests)."""
@@ -526,6 +562,11 @@ class Controller:
         # their sums are NaN exactly when a NaN is present
         if not math.isfinite(A.sum()) or math.isnan(lo.sum()) or math.isnan(hi.sum()):
             self._raise_non_finite()
+        inplace = None
+        if self._inplace is not None and self._solver._backend is self._inplace_backend:
+            inplace = self._inplace.solve()
+        if inplace is not None:  # the happy path of scheme "hqp" with DAQP: verified in place
+            return self._inplace_result(inplace, t, start)
         np.equal(lo, hi, out=self._row_is_equality)
         problem = self._new_problem()
         if self.scheme == "nullspace":
@@ -569,6 +610,31 @@ class Controller:
             _rate_units=self._rate_units, _error_units=self._error_units, _residual_sq=sq,
             _errors=tuple(task._last_error for task in self._tasks), _hard_rows_violation=hard_v,
             _level_sizes=self._level_sizes)
+
+    def _inplace_result(self, result: StackedResult, t: float, start: float) -> StepResult:
+        """The step result of an answer accepted by the in-place solver.
+
+        ``result.x`` is already inside the box and its slacks were measured at it, so the
+        per-task residuals come from those slacks (no second product with the rows).
+        """
+        zeta = result.x
+        safe = self._safe
+        safe.record_primary(zeta)  # type: ignore[union-attr]
+        s = result.stacked_slacks
+        sq = np.add.reduceat(s * s, self._starts) if s.size else np.zeros(0)
+        elapsed = time.perf_counter() - start
+        deadline = safe.deadline  # type: ignore[union-attr]
+        lower, upper = result.box
+        return StepResult(
+            zeta=zeta, status=result.status, hierarchy=result, t=t, step_time=elapsed,
+            scheme=self.scheme, solver=self.solver_name, lower=lower, upper=upper,
+            saturated=False, level_names=self.level_names,
+            stage=PRIMARY, clipped=self._inplace.clipped,  # type: ignore[union-attr]
+            deadline_missed=deadline is not None and elapsed > deadline,
+            _task_names=self._task_names, _rate_units=self._rate_units,
+            _error_units=self._error_units, _residual_sq=sq,
+            _errors=tuple(task._last_error for task in self._tasks),
+            _hard_rows_violation=result.hard_violation, _level_sizes=self._level_sizes)
 
     def _raise_non_finite(self) -> None:
         for task, sl in zip(self._tasks, self._task_slices, strict=True):

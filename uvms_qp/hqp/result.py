@@ -172,6 +172,12 @@ class StackedResult(HierarchyResult):
             return super().stacked_slacks
         return self._s[self._head:]
 
+    @property
+    def box(self) -> tuple[FloatArray, FloatArray]:
+        """The hard box ``(lower, upper)`` of the solve (views of the result's own copies)."""
+        n = self.x.shape[0]
+        return self._bounds[0][:n], self._bounds[1][:n]
+
     def _masks(self) -> tuple[np.ndarray, np.ndarray]:
         if self._active is None:
             n = self.x.shape[0]

@@ -266,6 +266,17 @@ class SafeSolver:
         attempts.append(f"{stage}: {detail}")
         return None
 
+    def record_primary(self, x: FloatArray) -> None:
+        """Book a command verified outside :meth:`solve` as a primary-stage success.
+
+        For a caller that solved and verified the primary stage itself (the controller's
+        in-place DAQP path, :mod:`uvms_qp.hqp.inplace`): the next degraded step decays from
+        ``x`` and the fallback count restarts, exactly as after a primary success here.
+        """
+        self.previous = x
+        self.consecutive = 0
+        self.stage_counts[PRIMARY] += 1
+
     # ---------------------------------------------------------------------------------- solve
     def solve(self, problem: Problem, start: float | None = None) -> SafeSolve:
         """Solve ``problem`` through the ladder (see the module docstring).

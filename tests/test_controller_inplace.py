@@ -1,0 +1,107 @@
+"""The controller's in-place DAQP path (uvms_qp.hqp.inplace) against its general path.
+
+The in-place path only shortens the happy path of ``scheme="hqp"`` with ``"daqp"``: on random
+UVMS problems (2-6 levels, equality and inequality tasks, active joint/vehicle bounds, hard
+linear inequalities) it must give the general path's command, statuses and residuals, and any
+answer it does not accept must reach the general path (and its safety ladder) unchanged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvms_qp.bench.sets import random_uvms_problem
+from uvms_qp.controller import Controller
+from uvms_qp.hqp import Status
+
+
+def _pair(seed: int, models: dict) -> tuple[Controller, Controller, object]:
+    fast_draw = random_uvms_problem(seed, models)
+    ref_draw = random_uvms_problem(seed, models)  # fresh task objects for the reference
+    ref_draw.model = fast_draw.model  # random DH models are rebuilt per draw: share one
+    fast = Controller(fast_draw.model, fast_draw.stack, solver="daqp", dt=fast_draw.dt)
+    ref = Controller(ref_draw.model, ref_draw.stack, solver="daqp", dt=ref_draw.dt)
+    ref._inplace = None  # the general path: Problem, back-end, verification, ladder
+    return fast, ref, fast_draw
+
+
+def test_in_place_path_matches_general_path_on_random_problems():
+    models: dict = {}
+    used = steps = 0
+    for seed in range(40):
+        fast, ref, draw = _pair(seed, models)
+        assert fast._inplace is not None
+        q = draw.q
+        for k in range(4):
+            state = draw.model.state(q)
+            a = fast.step(state, k * draw.dt)
+            b = ref.step(state, k * draw.dt)
+            steps += 1
+            used += fast._inplace.rejected == ""
+            assert a.status == b.status, (seed, k)
+            np.testing.assert_allclose(a.zeta, b.zeta, rtol=0, atol=1e-10, err_msg=f"{seed}")
+            np.testing.assert_allclose(a.lower, b.lower)
+            np.testing.assert_allclose(a.upper, b.upper)
+            for name, (r, unit) in b.task_residuals.items():
+                assert a.task_residuals[name][1] == unit
+                assert a.task_residuals[name][0] == pytest.approx(r, abs=1e-9), (seed, name)
+            np.testing.assert_allclose(a.hierarchy.level_residuals,
+                                       b.hierarchy.level_residuals, atol=1e-9)
+            assert a.bound_violation <= 1e-9
+            assert np.all(a.zeta >= a.lower) and np.all(a.zeta <= a.upper)
+            q = draw.model.integrate(q, a.zeta, draw.dt)
+    assert used >= 0.9 * steps  # the happy path is the common path
+
+
+def test_rejected_in_place_answer_goes_to_the_general_path():
+    models: dict = {}
+    fast, ref, draw = _pair(4, models)
+    state = draw.model.state(draw.q)
+    fast.step(state, 0.0)  # sets the in-place model up
+    model = fast._inplace._model
+    original = model.solve_in_place
+
+    def broken() -> int:
+        original()
+        model.x[:] = np.nan  # a NaN answer that claims success
+        return 1
+
+    model.solve_in_place = broken
+    result = fast.step(state, 0.0)
+    assert "non-finite" in fast._inplace.rejected
+    ref.step(state, 0.0)
+    expected = ref.step(state, 0.0)
+    assert result.ok and np.all(np.isfinite(result.zeta))
+    np.testing.assert_allclose(result.zeta, expected.zeta, atol=1e-9)
+    assert result.status == expected.status
+
+
+def test_in_place_box_and_hard_rows_are_verified():
+    models: dict = {}
+    fast, _, draw = _pair(11, models)
+    state = draw.model.state(draw.q)
+    fast.step(state, 0.0)
+    model = fast._inplace._model
+    original = model.solve_in_place
+
+    def outside() -> int:
+        original()
+        model.x[:] = fast._upper + 0.1  # claims success 0.1 beyond the box
+        return 1
+
+    model.solve_in_place = outside
+    result = fast.step(state, 0.0)
+    assert fast._inplace.rejected.startswith("box violated")
+    assert result.bound_violation <= 1e-9
+    assert np.all(result.zeta <= result.upper)
+    assert result.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+
+
+def test_in_place_path_only_for_hqp_with_daqp():
+    models: dict = {}
+    draw = random_uvms_problem(2, models)
+    assert Controller(draw.model, draw.stack, solver="cascade:quadprog",
+                      dt=draw.dt)._inplace is None
+    draw = random_uvms_problem(2, models)
+    assert Controller(draw.model, draw.stack, dt=draw.dt, scheme="weighted")._inplace is None

@@ -1,0 +1,190 @@
+"""DAQP's hierarchy on a fixed structure whose rows and sides the caller writes in place.
+
+A control loop solves the same structure every tick: the same number of variables, hard rows and
+rows per level; only the values change. :class:`InPlaceDaqp` owns the stacked buffers of that
+structure (a :class:`~uvms_qp.hqp.workspace.Workspace` plus the unclamped sides), the caller
+writes each tick's rows and sides straight into views of them, and :meth:`InPlaceDaqp.solve`
+hands them to DAQP and measures the answer without copying the problem anywhere:
+
+1. DAQP's clamped sides ``max(lo, -1e30)``, ``min(hi, 1e30)`` (two array operations);
+2. one update and one solve (through :class:`~uvms_qp.hqp.daqp_native.NativeDaqp` when
+   available), warm-started from the previous tick's working set;
+3. acceptance: exit flag 1 or 2, finite ``x``, ``x`` inside the box to ``1e-7`` (then clipped
+   into it exactly), hard rows at the clipped ``x`` within the solver's bare hard tolerance
+   (``1e-9``, never looser than the relative tolerance of
+   :func:`~uvms_qp.safety.verify.verify_command`);
+4. the level residuals and statuses of :func:`~uvms_qp.hqp.evaluate.evaluate_stacked` from one
+   product of the stacked rows with ``x``.
+
+Anything not accepted returns None with the reason in :attr:`InPlaceDaqp.rejected`; the caller
+then runs its general path (validation-free :class:`~uvms_qp.hqp.problem.Problem` over the same
+buffers, the rho_soft retry ladder and the safety ladder of :mod:`uvms_qp.safety`). So this class
+only ever shortens the happy path: every answer it returns would also have been accepted there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from time import perf_counter
+from typing import Any
+
+import numpy as np
+
+from .._validation import FloatArray
+from .daqp_native import NativeDaqp, native_available
+from .evaluate import evaluate_stacked
+from .result import StackedResult, Status
+from .workspace import DAQP_INF, Workspace
+
+#: Largest box violation of DAQP's answer that is clipped away (as the back-end's lean path).
+BOX_ACCEPT = 1e-7
+_SOLVED = (1, 2)
+
+
+def new_daqp_model() -> Any:
+    """A DAQP model: :class:`NativeDaqp` when it is available, else ``daqp.Model``."""
+    if native_available():
+        return NativeDaqp()
+    import daqp
+
+    return daqp.Model()
+
+
+class InPlaceDaqp:
+    """DAQP hierarchical solves over caller-filled buffers (see the module docstring).
+
+    Args:
+        n: Number of variables.
+        hard_rows: Number of hard general rows.
+        sizes: Rows per level, highest priority first.
+        W: Diagonal metric (n,) of the final regularisation ``min x' W x`` (positive).
+        settings: DAQP settings (``rho_soft``, ``time_limit``, ...).
+        level_tol: Relative tolerance deciding that a level is met.
+        hard_tol: Relative tolerance on the hard rows (also the bare acceptance threshold).
+        name: Solver name recorded in results.
+
+    Attributes:
+        ws: The workspace: ``ws.A`` = ``[I; A_H; A_1; ...; A_p]`` (write rows ``ws.A[n:]``).
+        lo: Stacked lower sides ``[lower; lo_H; lo_1; ...]`` (``-inf`` allowed), written by the
+            caller.
+        hi: Stacked upper sides.
+        w: Row weights of the level rows (``sum(sizes)``,).
+        rejected: Why the latest :meth:`solve` returned None ("" after an accepted solve).
+        clipped: Amount the latest accepted ``x`` was clipped into the box.
+    """
+
+    def __init__(self, n: int, hard_rows: int, sizes: Sequence[int], W: FloatArray,
+                 settings: dict[str, Any], *, level_tol: float, hard_tol: float,
+                 name: str = "daqp") -> None:
+        self.ws = ws = Workspace(n, hard_rows, sizes)
+        self.lo = np.zeros(ws.M)
+        self.hi = np.zeros(ws.M)
+        self.w = np.ones(ws.ml)
+        self.W = np.array(W, dtype=np.float64)
+        self.settings = dict(settings)
+        self.level_tol = float(level_tol)
+        self.hard_tol = float(hard_tol)
+        self.name = name
+        self.rejected = ""
+        self.clipped = 0.0
+        self._model: Any = None
+        self._native = False
+        self._hard_eq = np.zeros(ws.mh, dtype=bool)
+        self._hard_key: bytes | None = None
+        self._rho_soft = self.settings.get("rho_soft")
+        # persistent views (basic slicing once, not every tick)
+        self._lo_box, self._hi_box = self.lo[:n], self.hi[:n]
+        self._lo_hard, self._hi_hard = self.lo[n:ws.head], self.hi[n:ws.head]
+
+    def reset(self) -> None:
+        """Forget the DAQP model: the next solve sets it up afresh (a cold start)."""
+        self._hard_key = None
+
+    def _setup(self, hard_eq: np.ndarray) -> int:
+        ws = self.ws
+        sense = np.zeros(ws.M, dtype=np.intc)
+        sense[ws.n: ws.head][hard_eq] = 5  # hard equality rows: active and immutable
+        bp = np.unique(np.cumsum((ws.head, *ws.sizes))).astype(np.intc)
+        model = new_daqp_model()
+        flag = int(model.setup(np.diag(self.W), np.zeros(ws.n), ws.daqp_A, ws.bu, ws.bl, sense,
+                               break_points=bp)[0])
+        if flag < 0:
+            self._model = None
+            return flag
+        current = model.settings
+        current.update(self.settings)
+        model.settings = current
+        self._model = model
+        self._native = isinstance(model, NativeDaqp)
+        return flag
+
+    def solve(self) -> StackedResult | None:
+        """Solve the problem in the buffers; the accepted result, or None (see :attr:`rejected`).
+
+        The result owns copies of the sides and its slacks; ``x`` is inside the box.
+        """
+        start = perf_counter()
+        ws = self.ws
+        lo, hi = self.lo, self.hi
+        if ws.mh:
+            np.equal(self._lo_hard, self._hi_hard, out=self._hard_eq)
+            key = self._hard_eq.tobytes()
+        else:
+            key = b""
+        np.maximum(lo, -DAQP_INF, out=ws.bl)
+        np.minimum(hi, DAQP_INF, out=ws.bu)
+        model = self._model
+        if key != self._hard_key or model is None:
+            flag = self._setup(self._hard_eq)
+            if flag < 0:
+                self._hard_key = None
+                self.rejected = f"DAQP setup failed (exit flag {flag})"
+                return None
+            self._hard_key = key
+            model = self._model
+        elif self._native:
+            model.refresh()
+        else:
+            model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
+        if self._native:
+            flag = model.solve_in_place()
+            raw = model.x
+            c_time, iterations = model.solve_time, model.iterations
+        else:
+            raw, _, flag, extra = model.solve()
+            c_time, iterations = extra["solve_time"], extra["iterations"]
+        if flag not in _SOLVED:
+            self._hard_key = None  # set up afresh next time
+            self.rejected = f"DAQP exit flag {flag}"
+            return None
+        if not math.isfinite(raw.dot(raw)):  # NaN or inf anywhere (a huge x is refused too)
+            self.rejected = "non-finite x"
+            return None
+        x = np.minimum(np.maximum(raw, self._lo_box), self._hi_box)  # a fresh array
+        off = (x - raw).tolist()
+        clipped = max(max(off), -min(off))
+        if clipped > BOX_ACCEPT:
+            self.rejected = f"box violated by {clipped:.2e}"
+            return None
+        s = ws.slacks(x, lo, hi)
+        if ws.mh:
+            values = s[ws.n:ws.head].tolist()
+            hv = max(max(values), -min(values), 0.0)
+            if hv > self.hard_tol:
+                self.rejected = f"hard rows violated by {hv:.2e}"
+                return None
+        else:
+            hv = 0.0
+        self.clipped = clipped
+        self.rejected = ""
+        info = {"exitflag": flag, "daqp_solve_time": c_time, "iterations": iterations,
+                "rho_soft": self._rho_soft}
+        result = evaluate_stacked(ws, x, s, lo.copy(), hi.copy(), self.w, hv, self.name,
+                                  Status.OPTIMAL, "", level_tol=self.level_tol,
+                                  hard_tol=self.hard_tol, solve_time=perf_counter() - start,
+                                  info=info)
+        if not isinstance(result, StackedResult) or not result.ok:  # pragma: no cover
+            self.rejected = result.message or "not a stacked result"
+            return None
+        return result
