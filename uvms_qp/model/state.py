@@ -11,6 +11,7 @@ states never read each other's numbers.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -18,6 +19,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..errors import UnknownNameError
+from .vehicle import quaternion_to_rotation, rotation_to_rpy
 
 if TYPE_CHECKING:
     from .model import Model
@@ -54,7 +56,9 @@ class State:
     (NED) axes or in the frame's own axes.
     """
 
-    __slots__ = ("_arm", "_eta", "_eta_jacobian", "_jacobians", "_poses", "model", "q")
+    __slots__ = ("_arm", "_derived", "_eta", "_eta_jacobian", "_eta_jacobian_values",
+                 "_eta_list", "_jacobians", "_joint_list", "_poses", "_vehicle_rotation", "model",
+                 "q")
 
     def __init__(self, model: Model, q: Any) -> None:
         """Validate ``q`` and compute the kinematics (see :meth:`Model.check_configuration`)."""
@@ -67,6 +71,11 @@ class State:
         self._arm: dict[str, FloatArray] = {}
         self._eta: FloatArray | None = None
         self._eta_jacobian: FloatArray | None = None
+        self._eta_list: list[float] | None = None
+        self._eta_jacobian_values: tuple[float, ...] | None = None
+        self._joint_list: list[float] | None = None
+        self._vehicle_rotation: tuple[float, ...] = ()
+        self._derived: dict[Any, Any] | None = None
         pin.computeJointJacobians(model.pin_model, model._data, q)
         pin.updateFramePlacements(model.pin_model, model._data)
         model._owner = self
@@ -86,11 +95,52 @@ class State:
     def eta(self) -> FloatArray:
         """Vehicle pose ``[x, y, z, phi, theta, psi]`` / ``[x, y, psi]`` / ``[]`` [m, rad]."""
         if self._eta is None:
-            m = self.model
-            eta = np.array(m.vehicle.eta_values(self.q[: m.nq_vehicle]), dtype=np.float64)
+            eta = np.array(self.eta_floats(), dtype=np.float64)
             eta.setflags(write=False)
             self._eta = eta
         return self._eta
+
+    def eta_floats(self) -> list[float]:
+        """:attr:`eta` as a list of plain floats [m, rad] (cached; do not modify).
+
+        For per-tick code that works on the few pose coordinates one by one.
+        """
+        eta = self._eta_list
+        if eta is None:
+            m = self.model
+            if m.vehicle_kind == "spatial":  # Vehicle.eta_values, keeping the rotation
+                x, y, z, qx, qy, qz, qw = self.q[:7].tolist()
+                R = self._vehicle_rotation = quaternion_to_rotation(qx, qy, qz, qw)
+                eta = [x, y, z, *rotation_to_rpy(R)]
+            else:
+                eta = m.vehicle.eta_values(self.q[: m.nq_vehicle])
+            self._eta_list = eta
+        return eta
+
+    def joint_floats(self) -> list[float]:
+        """:attr:`joints` as a list of plain floats [rad] (cached; do not modify)."""
+        joints = self._joint_list
+        if joints is None:
+            joints = self._joint_list = self.q[self.model.nq_vehicle :].tolist()
+        return joints
+
+    def derived(self, key: Any) -> Any:
+        """A quantity stored with :meth:`store` at this state, or None.
+
+        Lets several consumers of the same state (e.g. the tasks of one control tick) share a
+        value derived from the kinematics (such as the arm's manipulability and its gradient)
+        instead of recomputing it. Keys are chosen by the producer (a tuple naming the quantity
+        and its parameters).
+        """
+        derived = self._derived
+        return None if derived is None else derived.get(key)
+
+    def store(self, key: Any, value: Any) -> Any:
+        """Keep ``value`` under ``key`` for :meth:`derived` at this state; returns ``value``."""
+        if self._derived is None:
+            self._derived = {}
+        self._derived[key] = value
+        return value
 
     @property
     def joints(self) -> FloatArray:
@@ -107,8 +157,10 @@ class State:
         """
         T = self._poses.get(frame)
         if T is None:
-            fid = self.model.frame_id(frame)
-            T = self._sync().oMf[fid].homogeneous
+            model = self.model
+            fid = model.frame_id(frame)
+            data = model._data if model._owner is self else self._sync()
+            T = data.oMf[fid].homogeneous
             T.setflags(write=False)
             self._poses[frame] = T
         return T
@@ -217,8 +269,8 @@ class State:
 
         Spatial: Fossen's transformation (``003_229789978cc4b235.txt``, Eq. (2)-(3)) restricted
         to the actuated columns; planar ``[R2(psi), 0; 0, 1]``; joint columns are zero.
-        Computed once per state in plain floats (the same numbers as
-        :meth:`~uvms_qp.model.vehicle.Vehicle.pose_jacobian`).
+        Computed once per state from :meth:`eta_jacobian_values` (the numbers of
+        :meth:`~uvms_qp.model.vehicle.Vehicle.pose_jacobian` up to rounding).
 
         Returns:
             ``(model.eta_size, model.nv)`` read-only array.
@@ -228,14 +280,45 @@ class State:
             m = self.model
             J = np.zeros((m.eta_size, m.nv))
             if m.eta_size:
+                values = self.eta_jacobian_values()
                 columns = m._eta_columns
                 if columns is None:  # every vehicle rate actuated: the block is J_eta itself
-                    J.put(m._eta_block, m.vehicle.pose_jacobian_values(self.eta))
+                    J.put(m._eta_block, values)
                 else:
-                    J[:, : m.n_vehicle] = m.vehicle.pose_jacobian(self.eta)[:, columns]
+                    full = np.array(values).reshape(m.eta_size, m.vehicle.nv)
+                    J[:, : m.n_vehicle] = full[:, columns]
             J.setflags(write=False)
             self._eta_jacobian = J
         return J
+
+    def eta_jacobian_values(self) -> tuple[float, ...]:
+        """Fossen's ``J(eta)`` over all vehicle rates, row-major plain floats (cached).
+
+        :meth:`~uvms_qp.model.vehicle.Vehicle.pose_jacobian_values` at :attr:`eta`:
+        ``eta_size x n`` entries with ``n`` the vehicle's full rate count (passive rates
+        included; :meth:`vehicle_pose_jacobian` keeps the actuated columns). Empty for a fixed
+        base.
+        """
+        values = self._eta_jacobian_values
+        if values is None:
+            eta = self.eta_floats()
+            if self.model.vehicle_kind == "spatial":
+                # Fossen's J with the rotation of the configuration's quaternion (kept by
+                # eta_floats; the matrix R(eta) up to rounding) instead of one rebuilt from eta
+                r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._vehicle_rotation
+                phi, theta = eta[3], eta[4]
+                sphi, cphi = math.sin(phi), math.cos(phi)
+                ctheta, ttheta = math.cos(theta), math.tan(theta)
+                values = (r00, r01, r02, 0.0, 0.0, 0.0,
+                          r10, r11, r12, 0.0, 0.0, 0.0,
+                          r20, r21, r22, 0.0, 0.0, 0.0,
+                          0.0, 0.0, 0.0, 1.0, sphi * ttheta, cphi * ttheta,
+                          0.0, 0.0, 0.0, 0.0, cphi, -sphi,
+                          0.0, 0.0, 0.0, 0.0, sphi / ctheta, cphi / ctheta)
+            else:
+                values = self.model.vehicle.pose_jacobian_values(eta)
+            self._eta_jacobian_values = values
+        return values
 
     def __repr__(self) -> str:
         return f"<State of {self.model.name!r} q={np.array2string(self.q, precision=4)}>"
