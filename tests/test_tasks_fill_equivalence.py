@@ -84,6 +84,8 @@ class Ref:
     def eta_jacobian(self):
         """Fossen's ``J_eta`` over zeta (actuated vehicle columns; joint columns zero)."""
         m, eta = self.model, self.eta
+        if m.vehicle_kind == "fixed":
+            return np.zeros((0, m.nv))
         if m.vehicle_kind == "planar":
             c, s = math.cos(eta[2]), math.sin(eta[2])
             full = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
@@ -400,3 +402,53 @@ def test_blended_station_keeping_reads_the_shaping_task_of_the_same_tick(model_n
     shaping.reset()
     station.reset()
     _check(station, model, qs)  # station keeping evaluated alone also computes w itself
+
+
+# ------------------------------------------------------------------- per-state plain floats
+@pytest.mark.parametrize("model_name", sorted(MODELS))
+def test_state_plain_float_views_equal_the_arrays(model_name):
+    model = MODELS[model_name]
+    for q in _configurations(model, seed=3):
+        state = model.state(q)
+        ref = Ref(model, q)
+        assert state.eta_floats() == state.eta.tolist()
+        np.testing.assert_allclose(state.eta, ref.eta, rtol=0, atol=1e-12)
+        assert state.joint_floats() == state.joints.tolist()
+        full = np.array(state.eta_jacobian_values()).reshape(model.eta_size, -1
+                                                             if model.eta_size else 0)
+        order = _PIN_VELOCITY[model.vehicle_kind]
+        J = ref.eta_jacobian()[:, : model.n_vehicle]
+        np.testing.assert_allclose(full[:, [order.index(a) for a in model.actuated]], J,
+                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.vehicle_pose_jacobian(), ref.eta_jacobian(), rtol=0,
+                                   atol=1e-12)
+
+
+def test_state_keeps_derived_values_per_state():
+    model = MODELS["bluerov2_heavy_alpha5"]
+    s1, s2 = (model.state(q) for q in _configurations(model, seed=4)[:2])
+    assert s1.derived(("x", 1)) is None
+    value = object()
+    assert s1.store(("x", 1), value) is value
+    assert s1.derived(("x", 1)) is value
+    assert s2.derived(("x", 1)) is None  # a new state starts empty
+
+
+@pytest.mark.parametrize("case", ["ee_position", "ee_pose", "station_hold", "current_alignment",
+                                  "attitude", "posture"])
+def test_a_subclass_overriding_compute_error_is_honoured_by_fill(case):
+    model = MODELS["bluerov2_heavy_alpha5"]
+    base = type(CASES[case](model))
+
+    class Shifted(base):  # type: ignore[misc, valid-type]
+        def compute_error(self, state, t):
+            return super().compute_error(state, t) + 1.0
+
+    task = CASES[case](model)
+    task.__class__ = Shifted
+    task.bind(model)
+    state = model.state(_configurations(model, seed=6)[0])
+    rows = task.rows(state, 0.0)
+    e = task.compute_error(state, 0.0)
+    ff = task.compute_feedforward(state, 0.0)
+    np.testing.assert_allclose(rows.lower, np.multiply(task.gain, e) + (0.0 if ff is None else ff))

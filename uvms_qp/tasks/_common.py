@@ -163,6 +163,44 @@ ANGLE_AXES = frozenset({"phi", "theta", "psi"})
 _TWO_PI = 2.0 * math.pi
 
 
+_LINEAR_RATES = frozenset({"u", "v", "w"})
+_POSITION_AXES = frozenset({"x", "y", "z"})
+
+
+class EtaRows:
+    """Writer of selected rows of the vehicle-pose Jacobian ``J_eta`` into a row block.
+
+    At bind: the entries of the rows that can be non-zero (a position coordinate moves with the
+    linear rates u, v, w only, an angle with the angular rates p, q, r only; joint columns are
+    zero), as flat positions in the ``(len(rows), nv)`` block and positions in the state's
+    :meth:`~uvms_qp.model.State.eta_jacobian_values`. Per tick :meth:`write` zeroes the block and
+    puts those plain floats (two array calls, no ``(eta_size, nv)`` matrix).
+
+    Args:
+        model: The bound model.
+        rows: Indices of the selected coordinates in ``eta``.
+    """
+
+    def __init__(self, model: Any, rows: Sequence[int]) -> None:
+        axes = eta_axes(model)
+        n_full = model.vehicle.nv  # row length of eta_jacobian_values (all vehicle rates)
+        columns = model._eta_columns or list(range(model.n_vehicle))
+        dst: list[int] = []
+        self.src: list[int] = []
+        for i, r in enumerate(rows):
+            for c, rate in enumerate(model.actuated):
+                if (axes[r] in _POSITION_AXES) == (rate in _LINEAR_RATES):
+                    dst.append(i * model.nv + c)
+                    self.src.append(r * n_full + columns[c])
+        self.dst = np.asarray(dst, dtype=np.intp)
+
+    def write(self, state: Any, A: FloatArray) -> None:
+        """Write the rows at ``state`` into ``A`` (every entry)."""
+        values = state.eta_jacobian_values()
+        A.fill(0.0)
+        A.put(self.dst, [values[k] for k in self.src])
+
+
 def vehicle_pose_jacobian(state: Any) -> FloatArray:
     """``state.vehicle_pose_jacobian()`` (read-only, computed once per state by the state)."""
     return state.vehicle_pose_jacobian()  # type: ignore[no-any-return]

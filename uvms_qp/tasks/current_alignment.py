@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import _TWO_PI, eta_axes, vehicle_pose_jacobian
+from ._common import _TWO_PI, EtaRows, eta_axes, vehicle_pose_jacobian
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -62,6 +62,7 @@ class CurrentAlignmentTask(ErrorTask):
         if direction is not None:
             self._apply_update("direction", direction)
         self._row = 0
+        self._rows: EtaRows | None = None
 
     def _bind(self, model: Model) -> int:
         axes = eta_axes(model)
@@ -70,6 +71,7 @@ class CurrentAlignmentTask(ErrorTask):
         if "r" not in model.actuated:
             raise InputError(f"{self.name}: model {model.name!r} does not actuate yaw rate r")
         self._row = axes.index("psi")
+        self._rows = EtaRows(model, [self._row])
         return 1
 
     def compute_error(self, state: State, t: float) -> FloatArray:
@@ -91,13 +93,17 @@ class CurrentAlignmentTask(ErrorTask):
              upper: FloatArray) -> None:
         """Write ``J_psi zeta = K wrap(psi_c + offset - psi)``.
 
-        The operations of :meth:`compute_error` in plain floats.
+        The operations of :meth:`compute_error` in plain floats; the row is written from the
+        state's plain-float ``J_eta`` entries.
         """
+        if not self._fused:
+            super().fill(state, t, A, lower, upper)
+            return
         heading = self.heading
         if heading is None:
             self._missing_heading()
-        e = (heading + self.offset - state.eta.item(self._row) + math.pi) % _TWO_PI
-        A[:] = state.vehicle_pose_jacobian()[self._row: self._row + 1]
+        e = (heading + self.offset - state.eta_floats()[self._row] + math.pi) % _TWO_PI
+        self._rows.write(state, A)  # type: ignore[union-attr]
         self._set_sides_floats([e - math.pi], lower, upper)
 
     def updatable(self) -> tuple[str, ...]:

@@ -94,12 +94,15 @@ class EndEffectorTask(ErrorTask):
         self._R_d: FloatArray | None = None
         self._v_d = np.zeros(3)
         self._w_d = np.zeros(3)
+        self._w_zero = True  # omega_d is zero (no feed-forward product)
         self._trajectory: Any = None
         self._planar_points: set[str] = set()  # arguments given as (x, y), checked at bind
         self._sel = np.arange(0)
         self._need_p = mode != "orientation"
         self._need_o = mode != "position"
         self._Jlog = np.eye(3)
+        self._sel_list: list[int] = []
+        self._work = np.zeros((6, 0))
         if position is not None or rotation is not None:
             self.set_target(position=position, rotation=rotation)
         if trajectory is not None:
@@ -126,6 +129,7 @@ class EndEffectorTask(ErrorTask):
             self._planar_points.discard("velocity")
         self._w_d = (np.zeros(3) if angular_velocity is None
                      else as_vector(angular_velocity, f"{self.name}.angular_velocity", 3))
+        self._w_zero = not self._w_d.any()
         self._trajectory = None
 
     def track(self, trajectory: Any) -> None:
@@ -177,11 +181,13 @@ class EndEffectorTask(ErrorTask):
                 self._R_d = rot
                 w = getattr(s, "angular_velocity", None)
                 self._w_d = np.zeros(3) if w is None else w
+                self._w_zero = w is None
             elif self._R_d is None:
                 raise InputError(f"task {self.name!r}: the trajectory has no orientation and no "
                                  "fixed rotation target is set")
             else:
                 self._w_d = np.zeros(3)
+                self._w_zero = True
 
     # ----------------------------------------------------------------------------------- binding
     def _bind(self, model: Model) -> int:
@@ -200,6 +206,8 @@ class EndEffectorTask(ErrorTask):
         self._sel = compact_index(sel)
         self._sel_local = compact_index(sel - 3) if self.mode == "orientation" else self._sel
         self._all_position = self.mode == "position" and len(axes) == 3
+        self._sel_list = sel.tolist()
+        self._work = np.zeros((6, model.nv))  # [J_p; Jlog J_omega] of the orientation modes
         return len(axes)
 
     # ---------------------------------------------------------------------------------- hot path
@@ -207,24 +215,44 @@ class EndEffectorTask(ErrorTask):
              upper: FloatArray) -> None:
         """Write ``J zeta = x_dot_d + K e`` (see the class docstring).
 
-        Position mode fuses :meth:`compute_error`, :meth:`compute_jacobian` and
-        :meth:`compute_feedforward` (the same operations, no 6-vectors); the other modes use
-        them as they are.
+        Fuses :meth:`compute_error`, :meth:`compute_jacobian` and :meth:`compute_feedforward`
+        (the same operations): the error and feed-forward of the selected axes as plain floats
+        (at most six) in the orientation modes, whose rows ``Jlog(R_e) J_omega`` take one
+        product into a work block, then one selection into ``A``.
         """
-        if self.mode != "position":
+        if not self._fused:
             super().fill(state, t, A, lower, upper)
             return
         self._sample(t)
-        e = self._p_d - state.position(self.frame)  # type: ignore[operator]
-        J = state.jacobian(self.frame)
-        if self._all_position:
-            A[:] = J[:3]
-            self._set_sides(e, self._v_d, lower, upper)
+        frame = self.frame
+        J = state.jacobian(frame)
+        if self.mode == "position":  # 3-vectors already arrays: numpy is as cheap as floats
+            e = self._p_d - state.position(frame)  # type: ignore[operator]
+            if self._all_position:
+                A[:] = J[:3]
+                self._set_sides(e, self._v_d, lower, upper)
+                return
+            sel = self._sel
+            A[:] = J[sel]
+            self._set_sides(e[sel], np.take(self._v_d, sel) if not isinstance(sel, slice)
+                            else np.asarray(self._v_d)[sel], lower, upper)
             return
-        sel = self._sel
-        A[:] = J[sel]
-        self._set_sides(e[sel], np.take(self._v_d, sel) if not isinstance(sel, slice)
-                        else np.asarray(self._v_d)[sel], lower, upper)
+        T = state.pose(frame)
+        R_e = self._R_d @ T[:3, :3].T  # type: ignore[operator]
+        Jlog = pin.Jlog3(R_e)
+        self._Jlog = Jlog
+        e6 = [0.0, 0.0, 0.0, *pin.log3(R_e).tolist()]
+        # Jlog^T omega_d; a fixed target (omega_d = 0) skips the product
+        ff6 = [0.0] * 6 if self._w_zero else [0.0, 0.0, 0.0, *(Jlog.T @ self._w_d).tolist()]
+        work = self._work
+        if self._need_p:
+            e6[:3] = (self._p_d - T[:3, 3]).tolist()  # type: ignore[operator]
+            ff6[:3] = np.asarray(self._v_d).tolist()
+            work[:3] = J[:3]
+        np.dot(Jlog, J[3:], out=work[3:])
+        A[:] = work[self._sel]
+        self._set_sides_floats([e6[i] for i in self._sel_list], lower, upper,
+                               [ff6[i] for i in self._sel_list])
 
     # -------------------------------------------------------------------------------- evaluation
     def compute_error(self, state: State, t: float) -> FloatArray:
@@ -273,6 +301,7 @@ class EndEffectorTask(ErrorTask):
         elif key == "rotation":
             self._R_d = as_rotation(value, f"{self.name}.rotation")
             self._w_d = np.zeros(3)
+            self._w_zero = True
             self._trajectory = None
         elif key == "trajectory":
             self.track(value)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from operator import sub
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -150,6 +151,8 @@ class JointLimitTask(Task):
         self._hi_list: list[float] = []
         self._lo_m_list: list[float] = []
         self._hi_m_list: list[float] = []
+        self._joint_list: list[int] = []
+        self._per_joint: list[tuple[float, float, float, float, float]] = []
         self.value = float("nan")
 
     @property
@@ -181,6 +184,10 @@ class JointLimitTask(Task):
                              f"limits of joint {model.joint_names[idx[j]]!r}")
         self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
         self._jsel = compact_index(idx)
+        self._joint_list = idx.tolist()
+        span = hi - lo
+        self._per_joint = list(zip(lo.tolist(), hi.tolist(), C.tolist(), span.tolist(),
+                                   (LIMIT_CLEARANCE * span).tolist(), strict=True))
         self._set_band()
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
@@ -204,30 +211,43 @@ class JointLimitTask(Task):
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write the gradient rows or the margin band (see the class docstring)."""
+        """Write the gradient rows or the margin band (see the class docstring).
+
+        Per joint in plain floats (a handful of joints; lists sized at bind): the band, and
+        the operations of :func:`joint_limit_index` in the same order.
+        """
+        joints = state.joint_floats()
+        q = [joints[i] for i in self._joint_list]
         A[:] = self._A
-        if self.mode == "margin":  # plain floats: a handful of joints (lists sized at bind)
-            q = state.joints[self._jsel].tolist()
+        if self.mode == "margin":
             k = self.gain
             lower[:] = [(a - x) * k for a, x in zip(self._lo_m_list, q, strict=False)]
             upper[:] = [(b - x) * k for b, x in zip(self._hi_m_list, q, strict=False)]
             self._last_error = np.array((min(min(map(sub, q, self._lo_list)),
                                              min(map(sub, self._hi_list, q))),))
             return
-        H, g = self.compute_value(state)
+        H = 0.0
+        g = []
+        for x, (lo, hi, C, span, tiny) in zip(q, self._per_joint, strict=True):
+            a = max(hi - x, tiny)
+            b = max(x - lo, tiny)
+            H += span * span / (C * a * b)
+            g.append(span * span * (2.0 * x - hi - lo) / (C * a * a * b * b))
         self.value = H
-        self._last_error = np.array([H])
+        self._last_error = np.array((H,))
         if self.mode == "damping":
             lower[:] = 0.0
             upper[:] = 0.0
-            self._row_weights = self.weight * (1.0 + np.abs(g))  # a new array: refreshed
+            # a new array every tick: the controller refreshes weights it has not seen
+            self._row_weights = np.array([self.weight * (1.0 + abs(x)) for x in g])
             return
         scale = -self.gain
         if self.normalize:
-            norm = float(np.sqrt(g @ g))
+            norm = math.sqrt(sum(x * x for x in g))
             scale = scale / norm if norm > 1e-12 else 0.0
-        np.multiply(scale, g, out=lower)
-        upper[:] = lower
+        sides = [scale * x for x in g]
+        lower[:] = sides
+        upper[:] = sides
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -158,6 +158,15 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
     Returns:
         ``(w, grad)`` with ``grad`` of shape (n,).
     """
+    w, grad = manipulability_floats(J6, rows)
+    return w, np.array(grad)
+
+
+def manipulability_floats(J6: FloatArray, rows: Any = None) -> tuple[float, list[float]]:
+    """:func:`manipulability_and_gradient` with the gradient as a list of plain floats.
+
+    For per-tick code that writes the gradient into row buffers itself (same numbers).
+    """
     n = J6.shape[1]
     cols = J6.T.tolist()
     if rows is None:
@@ -169,11 +178,11 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
     if rows is None or sel == [0, 1, 2]:
         fast = _position_gradient(cols)
         if fast is not None:
-            return fast[0], np.array(fast[1])
+            return fast
     w, wP = _scaled_pinv_t(J6[sel])
     P6 = np.zeros((6, n))
     P6[sel] = wP
-    return w, np.array(_general_gradient(cols, P6.T.tolist()))
+    return w, _general_gradient(cols, P6.T.tolist())
 
 
 def default_axes(model: Model) -> list[str]:
@@ -285,7 +294,8 @@ class ManipulabilityTask(Task):
         self._w_dot = 0.0
         self.value = float("nan")
         self.shaping = 0.0
-        self._cache: tuple[Any, float, FloatArray] = (None, 0.0, np.zeros(0))
+        self._key: tuple[Any, ...] = ()
+        self._zeros: list[float] = []
 
     @property
     def equality_rows(self) -> bool:
@@ -300,7 +310,10 @@ class ManipulabilityTask(Task):
         self.axes = list(axes)
         self._sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
         self._rows = None if self._sel.tolist() == [0, 1, 2] else self._sel.tolist()
+        self._key = ("manipulability", self.frame, None if self._rows is None
+                     else tuple(self._rows))
         self._nvh = model.n_vehicle
+        self._zeros = [0.0] * model.n_vehicle  # vehicle columns of the floor row
         n = model.n_joints
         self._select = np.zeros((n, model.nv))  # rows of ascend/shaping: qdot = ...
         self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
@@ -312,32 +325,39 @@ class ManipulabilityTask(Task):
         self._w_dot = 0.0
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
-        """``(w, grad w)`` at ``state`` (gradient over the arm joints, (n_joints,)).
+        """``(w, grad w)`` at ``state`` (gradient over the arm joints, (n_joints,))."""
+        w, g = self._value(state)
+        return w, np.array(g)
 
-        The last state's values are kept (compared by identity), so a task that reads them in
-        the same tick (a blended :class:`StationKeepingTask`) does not recompute them.
+    def _value(self, state: State) -> tuple[float, list[float]]:
+        """``(w, grad w)`` as plain floats, computed once per state and measure.
+
+        Kept on the state (:meth:`~uvms_qp.model.State.store`), so every task reading the same
+        measure in the same tick (another manipulability task, a blended
+        :class:`StationKeepingTask`) shares one evaluation.
         """
-        cached = self._cache
-        if cached[0] is state:
-            return cached[1], cached[2]
-        w, g = manipulability_and_gradient(state.arm_jacobian(self.frame), self._rows)
-        self._cache = (state, w, g)
-        return w, g
+        value = state.derived(self._key)
+        if value is None:
+            value = state.store(self._key, manipulability_floats(
+                state.arm_jacobian(self.frame), self._rows))
+        return value  # type: ignore[no-any-return]
 
     def shaping_factor(self, state: State) -> float:
         """``k(w)`` of :func:`shaping_function` at ``state`` (mode ``"shaping"``)."""
-        return shaping_function(self.compute_value(state)[0], self.threshold)  # type: ignore[arg-type]
+        return shaping_function(self._value(state)[0], self.threshold)  # type: ignore[arg-type]
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write the rows of the selected mode (see the class docstring)."""
-        w, g = self.compute_value(state)
+        """Write the rows of the selected mode (see the class docstring).
+
+        The gradient stays a list of plain floats (a handful of joints): the floor row is
+        written in one assignment, the ascend/shaping sides as one list each.
+        """
+        w, g = self._value(state)
         self.value = w
-        self._last_error = np.array([w])
+        self._last_error = np.array((w,))
         if self.mode == "floor":
-            nvh = self._nvh
-            A[0, :nvh] = 0.0
-            A[0, nvh:] = g
+            A[0] = self._zeros + g
             lower[0] = self.gain * (self.minimum - w)  # type: ignore[operator]
             upper[0] = np.inf
             return
@@ -350,8 +370,9 @@ class ManipulabilityTask(Task):
             switch = 0.0 if self._w_dot > 0.0 else 1.0
             self.shaping = shaping_function(w, self.threshold)  # type: ignore[arg-type]
             scale *= self.shaping * switch
-        np.multiply(scale, g, out=lower)
-        upper[:] = lower
+        sides = [scale * x for x in g]
+        lower[:] = sides
+        upper[:] = sides
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

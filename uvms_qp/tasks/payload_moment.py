@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -120,30 +121,30 @@ class PayloadMomentTask(Task):
              upper: FloatArray) -> None:
         """Write the reduce rows or the bound row (see the class docstring).
 
-        The gradient is written straight into the row buffer (the operations of
-        :meth:`compute_value`; the bound row as one list of plain floats).
+        The operations of :meth:`compute_value` in plain floats (one value per joint), the rows
+        written with one assignment per buffer.
         """
         x, y = self._lever_arm(state)
-        Jp = state.arm_jacobian(self.frame)
         F = self.force
         M = (x * x + y * y) * F
         self.value = M
-        self._last_error = np.array([M])
+        self._last_error = np.array((M,))
+        a, b = 2.0 * F * x, 2.0 * F * y
+        rx, ry = state.arm_jacobian(self.frame)[:2].tolist()
+        g = [a * u + b * v for u, v in zip(rx, ry, strict=True)]
         if self.mode == "bound":
-            a, b = 2.0 * F * x, 2.0 * F * y
-            A[0] = self._zeros + [a * u + b * v for u, v in zip(*Jp[:2].tolist(), strict=False)]
+            A[0] = self._zeros + g
             lower[0] = -np.inf
             upper[0] = self.gain * (self.maximum - M)  # type: ignore[operator]
             return
         A[:] = self._select
-        g = (2.0 * F * x) * Jp[0]
-        g += (2.0 * F * y) * Jp[1]
         scale = -self.gain
         if self.normalize:
-            norm = float(np.sqrt(g @ g))
+            norm = math.sqrt(sum(v * v for v in g))
             scale = scale / norm if norm > 1e-12 else 0.0
-        np.multiply(scale, g, out=lower)
-        upper[:] = lower
+        sides = [scale * v for v in g]
+        lower[:] = sides
+        upper[:] = sides
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

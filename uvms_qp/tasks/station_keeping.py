@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -9,7 +10,9 @@ import numpy as np
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from ._common import (
+    _TWO_PI,
     ANGLE_AXES,
+    EtaRows,
     compact_index,
     eta_axes,
     parse_axes,
@@ -79,7 +82,10 @@ class StationKeepingTask(ErrorTask):
         self.axes: list[str] = []
         self._idx: Any = np.zeros(0, dtype=int)
         self._angle_pos: list[int] = []
+        self._eta_pos: list[int] = []
+        self._rows: EtaRows | None = None
         self._target: FloatArray | None = None
+        self._target_list: list[float] | None = None
 
     def _bind(self, model: Model) -> int:
         known = eta_axes(model)
@@ -101,10 +107,17 @@ class StationKeepingTask(ErrorTask):
             raise InputError(f"{self.name}.target: expected {len(axes)} values for axes "
                              f"{axes}, got {self._target_arg.shape[0]}")
         self.axes = list(axes)
-        self._idx = compact_index([known.index(a) for a in axes])
+        self._eta_pos = [known.index(a) for a in axes]
+        self._idx = compact_index(self._eta_pos)
         self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
-        self._target = None if self._target_arg is None else self._target_arg.copy()
+        self._rows = EtaRows(model, self._eta_pos)
+        self._hold(self._target_arg)
         return len(axes)
+
+    def _hold(self, value: FloatArray | None) -> None:
+        """Set the held values (a copy, also kept as plain floats for :meth:`fill`), or None."""
+        self._target = None if value is None else value.copy()
+        self._target_list = None if value is None else value.tolist()
 
     def link(self, tasks: dict[str, Any]) -> None:
         """Find the manipulability task named by ``blend``."""
@@ -121,13 +134,13 @@ class StationKeepingTask(ErrorTask):
 
     def reset(self) -> None:
         """Forget the activation pose (a new one is taken at the next evaluation)."""
-        self._target = None if self._target_arg is None else self._target_arg.copy()
+        self._hold(self._target_arg)
 
     def set_target(self, target: Any) -> None:
         """Set the held values for the selected coordinates [m, rad]."""
         value = as_vector(target, f"{self.name}.target", len(self.axes) or None)
         self._target_arg = value
-        self._target = value.copy()
+        self._hold(value)
 
     @property
     def held_pose(self) -> FloatArray | None:
@@ -140,7 +153,7 @@ class StationKeepingTask(ErrorTask):
         if self._target is None:
             if self.hold == "current":
                 return np.zeros(len(self.axes))
-            self._target = eta.copy()
+            self._hold(eta)
         e = self._target - eta
         wrap_angles_in_place(e, self._angle_pos)
         if self._blend_task is not None:
@@ -153,10 +166,30 @@ class StationKeepingTask(ErrorTask):
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write ``J_eta,S zeta = K (eta_d - eta)_S`` (no feed-forward)."""
-        e = self.compute_error(state, t)
-        A[:] = state.vehicle_pose_jacobian()[self._idx]
-        self._set_sides(e, None, lower, upper)
+        """Write ``J_eta,S zeta = K (eta_d - eta)_S`` (no feed-forward).
+
+        The operations of :meth:`compute_error` per coordinate in plain floats (one to six
+        values); the rows are written from the state's plain-float ``J_eta`` entries.
+        """
+        if not self._fused:
+            super().fill(state, t, A, lower, upper)
+            return
+        eta = state.eta_floats()
+        target = self._target_list
+        if target is None and self.hold == "activation":
+            self._hold(np.array([eta[i] for i in self._eta_pos]))
+            target = self._target_list
+        if target is None:  # hold="current": the set point is the pose itself
+            e = [0.0] * len(self._eta_pos)
+        else:
+            e = [x - eta[i] for x, i in zip(target, self._eta_pos, strict=True)]
+            for i in self._angle_pos:
+                e[i] = (e[i] + math.pi) % _TWO_PI - math.pi
+            if self._blend_task is not None:
+                scale = 1.0 - self._blend_task.shaping_factor(state)
+                e = [x * scale for x in e]
+        self._rows.write(state, A)  # type: ignore[union-attr]
+        self._set_sides_floats(e, lower, upper)
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -221,10 +221,25 @@ class ErrorTask(Task):
                  gain: float | list[float] = 1.0) -> None:
         super().__init__(name=name, weight=weight)
         self.gain: float | FloatArray = as_gain(gain, f"{self.name}.gain")
+        self._fused = False
+
+    def _defines_compute_methods(self) -> bool:
+        """True when the class that defines :meth:`fill` also defines the ``compute_*`` it uses.
+
+        Checked at bind: a fused ``fill`` (the same operations as the ``compute_*`` methods of
+        its class) is valid only if no subclass replaced one of them.
+        """
+        cls = type(self)
+        owner = next(c for c in cls.__mro__ if "fill" in c.__dict__)
+        return all(getattr(cls, name) is getattr(owner, name)
+                   for name in ("compute_error", "compute_jacobian", "compute_feedforward"))
 
     def bind(self, model: Model) -> Task:
         """Bind (see :meth:`Task.bind`) and check the gain length against the row count."""
         super().bind(model)
+        # a fused fill reproduces its own class's compute_* methods; a subclass overriding any
+        # of them gets the generic fill that calls them
+        self._fused = self._defines_compute_methods()
         if isinstance(self.gain, np.ndarray) and self.gain.shape[0] != self.dim:
             dim = self.dim
             self.model, self.dim = None, 0
@@ -270,17 +285,20 @@ class ErrorTask(Task):
             lower += ff
         upper[:] = lower
 
-    def _set_sides_floats(self, e: list[float], lower: FloatArray, upper: FloatArray) -> None:
-        """:meth:`_set_sides` without feed-forward for an error given as plain floats.
+    def _set_sides_floats(self, e: list[float], lower: FloatArray, upper: FloatArray,
+                          ff: list[float] | None = None) -> None:
+        """:meth:`_set_sides` for an error (and feed-forward) given as plain floats.
 
-        ``lower = upper = K e`` entry by entry (the same products as the array version),
-        written with one assignment per side; the kept error is a new array.
+        ``lower = upper = K e (+ ff)`` entry by entry (the same products and sums as the
+        array version), written with one assignment per side; the kept error is a new array.
         """
         gain = self.gain  # per-row gains are checked against dim at bind and update
         if isinstance(gain, np.ndarray):
             sides = [k * x for k, x in zip(gain.tolist(), e, strict=False)]
         else:
             sides = [gain * x for x in e]
+        if ff is not None:
+            sides = [x + f for x, f in zip(sides, ff, strict=False)]
         lower[:] = sides
         upper[:] = sides
         self._last_error = np.array(e)

@@ -11,6 +11,7 @@ from .._validation import FloatArray, as_scalar
 from ..errors import InputError
 from ._common import (
     _TWO_PI,
+    EtaRows,
     compact_index,
     eta_axes,
     parse_axes,
@@ -67,6 +68,7 @@ class VehicleAttitudeTask(ErrorTask):
         self._target = np.zeros(0)
         self._eta_pos: list[int] = []
         self._pairs: list[tuple[float, int]] = []
+        self._rows: EtaRows | None = None
 
     def _bind(self, model: Model) -> int:
         known = eta_axes(model)
@@ -82,6 +84,7 @@ class VehicleAttitudeTask(ErrorTask):
         self._all = list(range(len(self.axes)))
         self._target = np.array([self.roll if a == "phi" else self.pitch for a in self.axes])
         self._eta_pos = [known.index(a) for a in self.axes]
+        self._rows = EtaRows(model, self._eta_pos)
         self._set_pairs()
         return len(self.axes)
 
@@ -104,11 +107,14 @@ class VehicleAttitudeTask(ErrorTask):
         """Write ``J_eta,S zeta = K wrap(eta_d - eta)_S``.
 
         The error in plain floats (the operations of :meth:`compute_error` and
-        :func:`~uvms_qp.tasks._common.wrap_angle` per angle); the rows are a slice of the
-        state's cached ``J_eta``.
+        :func:`~uvms_qp.tasks._common.wrap_angle` per angle); the rows are written from the
+        state's plain-float ``J_eta`` entries.
         """
-        eta = state.eta.tolist()
-        A[:] = state.vehicle_pose_jacobian()[self._idx]
+        if not self._fused:
+            super().fill(state, t, A, lower, upper)
+            return
+        eta = state.eta_floats()
+        self._rows.write(state, A)  # type: ignore[union-attr]
         self._set_sides_floats([(a - eta[i] + math.pi) % _TWO_PI - math.pi
                                 for a, i in self._pairs], lower, upper)
 
