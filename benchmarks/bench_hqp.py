@@ -10,8 +10,12 @@ the same machine load), DAQP's own reported C time next to the wall time of
 * ``solve_problem`` on a normalised problem (the trusted entry a controller uses),
 * the same two entries on the reference path (``lean=False``: full normalisation, stacking and
   evaluation on the ``Problem``; this is what every call cost before the lean path),
-* a bare ``daqp.solve`` call and a reused ``daqp.Model`` (``update`` + ``solve``) on the same data:
-  the floor of any Python wrapper.
+* :class:`~uvms_qp.hqp.inplace.InPlaceDaqp` on the same structure, the caller writing the rows
+  and sides into its buffers every call (what the controller does each tick): verified answer
+  and full result, no validation;
+* a bare ``daqp.solve`` call, a reused ``daqp.Model`` (``update`` + ``solve``) and the direct C
+  calls of :class:`~uvms_qp.hqp.daqp_native.NativeDaqp` (``refresh`` + ``solve_in_place``) on
+  the same data: the floor of any Python wrapper.
 
 The ratio column is the median wall time over the median DAQP C time of the lean
 ``solve_hierarchy`` runs (the issue's target is <= 2x). Cascades and the closed form follow.
@@ -29,6 +33,8 @@ from typing import Any
 import numpy as np
 
 from uvms_qp.hqp import HierarchySolver, Rows, available_solvers, solve_hierarchy
+from uvms_qp.hqp.daqp_native import NativeDaqp, native_available
+from uvms_qp.hqp.inplace import InPlaceDaqp
 from uvms_qp.hqp.problem import normalize_problem
 
 SIZES = (6, 3, 1, 4)
@@ -89,6 +95,31 @@ def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str,
         model.update(A=A, bupper=bu, blower=bl)
         return model.solve()
 
+    inplace = InPlaceDaqp(n, 0, SIZES, np.ones(n), {"rho_soft": 1e-8, "primal_tol": 1e-10},
+                          level_tol=1e-6, hard_tol=1e-9)
+    in_rows, in_lo, in_hi = inplace.ws.A[n:], inplace.lo, inplace.hi
+
+    def inplace_call():
+        in_rows[...] = A  # the caller's per-call writes
+        in_lo[:n], in_hi[:n] = lo, hi
+        in_lo[n:] = b
+        in_hi[n:] = b
+        return inplace.solve()
+
+    fns = {"native": None}
+    if native_available():
+        native = NativeDaqp()
+        native.setup(H, f, A.copy(), bu.copy(), bl.copy(), sense.copy(), bp)
+        settings = native.settings
+        settings.update(rho_soft=1e-8, primal_tol=1e-10)
+        native.settings = settings
+
+        def native_call():
+            native.refresh()
+            return native.solve_in_place()
+
+        fns["native"] = native_call
+
     c_times: list[float] = []
 
     def api():
@@ -104,6 +135,8 @@ def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str,
         "ref_prob": lambda: ref_prob.solve_problem(problem),
         "bare": lambda: daqp.solve(H, f, A, bu, bl, sense, break_points=bp, rho_soft=1e-8),
         "model": model_call,
+        "inplace": inplace_call,
+        **{k: v for k, v in fns.items() if v is not None},
     }, repeat)
     c_us = float(np.median(c_times) * 1e6)
 
@@ -119,7 +152,10 @@ def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str,
         ("daqp reference: solve_problem", runs["ref_prob"][0], ratio("ref_prob")),
         ("bare daqp.solve (wall)", runs["bare"][0], ratio("bare")),
         ("daqp.Model update+solve (wall)", runs["model"][0], ratio("model")),
+        ("in-place, fixed structure (verified)", runs["inplace"][0], ratio("inplace")),
     ]
+    if "native" in runs:
+        out.append(("direct C refresh+solve (wall)", runs["native"][0], ratio("native")))
     for name in available_solvers():
         if name == "daqp" or (name == "nullspace" and box != "wide"):
             continue

@@ -9,12 +9,13 @@ hands them to DAQP and measures the answer without copying the problem anywhere:
 1. DAQP's clamped sides ``max(lo, -1e30)``, ``min(hi, 1e30)`` (two array operations);
 2. one update and one solve (through :class:`~uvms_qp.hqp.daqp_native.NativeDaqp` when
    available), warm-started from the previous tick's working set;
-3. acceptance: exit flag 1 or 2, finite ``x``, ``x`` inside the box to ``1e-7`` (then clipped
-   into it exactly), hard rows at the clipped ``x`` within the solver's bare hard tolerance
+3. acceptance, from one product of the stacked rows with DAQP's ``x``: exit flag 1 or 2,
+   finite ``x``, ``x`` inside the box to ``1e-7`` (then clipped into it exactly and measured
+   again), hard rows at the clipped ``x`` within the solver's bare hard tolerance
    (``1e-9``, never looser than the relative tolerance of
    :func:`~uvms_qp.safety.verify.verify_command`);
-4. the level residuals and statuses of :func:`~uvms_qp.hqp.evaluate.evaluate_stacked` from one
-   product of the stacked rows with ``x``.
+4. the level residuals and statuses of :func:`~uvms_qp.hqp.evaluate.evaluate_stacked` from the
+   same slacks.
 
 Anything not accepted returns None with the reason in :attr:`InPlaceDaqp.rejected`; the caller
 then runs its general path (validation-free :class:`~uvms_qp.hqp.problem.Problem` over the same
@@ -158,19 +159,28 @@ class InPlaceDaqp:
             self._hard_key = None  # set up afresh next time
             self.rejected = f"DAQP exit flag {flag}"
             return None
-        if not math.isfinite(raw.dot(raw)):  # NaN or inf anywhere (a huge x is refused too)
+        # one product measures everything: the box rows' slacks are raw - clip(raw, box), so
+        # they give the clip amount, and any NaN/inf in raw makes the sum of slacks non-finite
+        n = ws.n
+        s = ws.slacks(raw, lo, hi)
+        values = s.tolist()
+        if not math.isfinite(sum(values)):
             self.rejected = "non-finite x"
             return None
-        x = np.minimum(np.maximum(raw, self._lo_box), self._hi_box)  # a fresh array
-        off = (x - raw).tolist()
-        clipped = max(max(off), -min(off))
+        box = values[:n]
+        clipped = max(max(box), -min(box))
         if clipped > BOX_ACCEPT:
             self.rejected = f"box violated by {clipped:.2e}"
             return None
-        s = ws.slacks(x, lo, hi)
+        if clipped:  # round-off outside the box: clip exactly and measure again
+            x = raw - s[:n]
+            s = ws.slacks(x, lo, hi)
+            values = s.tolist()
+        else:
+            x = raw.copy()
         if ws.mh:
-            values = s[ws.n:ws.head].tolist()
-            hv = max(max(values), -min(values), 0.0)
+            top = values[n:ws.head]
+            hv = max(max(top), -min(top), 0.0)
             if hv > self.hard_tol:
                 self.rejected = f"hard rows violated by {hv:.2e}"
                 return None
