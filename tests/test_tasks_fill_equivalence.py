@@ -7,6 +7,7 @@ the SO(3) log and its Jacobian, Yoshikawa's measure with the trace form of its g
 (``000_7b5f597fe4e36aa4.txt, Eq. (18)-(19)``), the joint-limit index
 (``003_229789978cc4b235.txt, Eq. (15)-(16)``) and the payload moment (Eq. (20)-(21)). Tasks run
 over several ticks, so run-time memory (activation set points, ``w_dot``) is covered too.
+Also: the per-instance units of the rows and errors.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import pytest
 
 from uvms_qp.model import bundled_models, load_model
 from uvms_qp.tasks import (
+    TASK_TYPES,
     CurrentAlignmentTask,
     EndEffectorTask,
     JointLimitTask,
@@ -402,6 +404,54 @@ def test_blended_station_keeping_reads_the_shaping_task_of_the_same_tick(model_n
     shaping.reset()
     station.reset()
     _check(station, model, qs)  # station keeping evaluated alone also computes w itself
+
+
+# ------------------------------------------------------------------------------ units
+@pytest.mark.parametrize(("make", "rate", "error"), [
+    (lambda: EndEffectorTask(position=P), "m/s", "m"),
+    (lambda: EndEffectorTask(mode="orientation", rotation=[0, 0, 0]), "rad/s", "rad"),
+    (lambda: EndEffectorTask(mode="pose", position=P, rotation=[0, 0, 0]), "m/s, rad/s",
+     "m, rad"),
+    (lambda: EndEffectorTask(mode="pose", axes=["rx", "ry"], position=P, rotation=[0, 0, 0]),
+     "rad/s", "rad"),
+    (lambda: StationKeepingTask(), "m/s, rad/s", "m, rad"),
+    (lambda: StationKeepingTask(axes=["x", "z"]), "m/s", "m"),
+    (lambda: StationKeepingTask(axes=["psi"]), "rad/s", "rad"),
+    (lambda: ManipulabilityTask(mode="floor", minimum=0.01), "m^3/s", "m^3"),
+    (lambda: ManipulabilityTask(mode="ascend"), "rad/s", "m^3"),
+    (lambda: ManipulabilityTask(mode="shaping", threshold=0.1, axes=["x", "rz"]), "rad/s",
+     "m"),
+    (lambda: ManipulabilityTask(mode="floor", minimum=0.1, axes=["rx", "ry"]), "1/s", "1"),
+    (lambda: JointLimitTask(mode="margin"), "rad/s", "rad"),
+    (lambda: JointLimitTask(mode="gradient"), "rad/s", "1"),
+    (lambda: PayloadMomentTask(), "rad/s", "N m^2"),
+    (lambda: PayloadMomentTask(mode="bound", maximum=1.0), "N m^2/s", "N m^2"),
+])
+def test_units_follow_the_bound_rows(make, rate, error):
+    task = make()
+    cls = type(task)
+    assert (task.rate_unit, task.error_unit) == (cls.rate_unit, cls.error_unit)  # before bind
+    task.bind(MODELS["bluerov2_heavy_alpha5"])
+    assert (task.rate_unit, task.error_unit) == (rate, error)
+    assert f"rows [{rate}]" in task.describe()
+    assert (cls.rate_unit, cls.error_unit) == (type(make()).rate_unit, type(make()).error_unit)
+
+
+def test_every_task_type_has_default_units():
+    for cls in TASK_TYPES.values():
+        assert cls.rate_unit and cls.error_unit, cls.__name__
+
+
+def test_the_controller_reports_the_bound_units():
+    from uvms_qp.controller import Controller
+    from uvms_qp.stack import Level, Stack
+
+    model = MODELS["bluerov2_heavy_alpha5"]
+    stack = Stack(levels=[Level(EndEffectorTask(position=P)),
+                          Level(StationKeepingTask(axes=["psi"]))])
+    result = Controller(model, stack, dt=0.05).step(model.state(model.home()), 0.0)
+    assert result.task_residuals["end_effector"][1] == "m/s"
+    assert result.task_residuals["station_keeping"][1] == "rad/s"
 
 
 # ------------------------------------------------------------------- per-state plain floats

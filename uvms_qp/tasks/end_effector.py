@@ -207,6 +207,10 @@ class EndEffectorTask(ErrorTask):
         self._sel_local = compact_index(sel - 3) if self.mode == "orientation" else self._sel
         self._all_position = self.mode == "position" and len(axes) == 3
         self._sel_list = sel.tolist()
+        linear = any(a in ("x", "y", "z") for a in axes)
+        angular = any(a in ("rx", "ry", "rz") for a in axes)
+        self.error_unit = ", ".join(u for u, on in (("m", linear), ("rad", angular)) if on)
+        self.rate_unit = ", ".join(u for u, on in (("m/s", linear), ("rad/s", angular)) if on)
         self._work = np.zeros((6, model.nv))  # [J_p; Jlog J_omega] of the orientation modes
         return len(axes)
 

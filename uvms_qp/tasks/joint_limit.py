@@ -185,6 +185,7 @@ class JointLimitTask(Task):
         self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
         self._jsel = compact_index(idx)
         self._joint_list = idx.tolist()
+        self.error_unit = "rad" if self.mode == "margin" else "1"  # distance or index H
         span = hi - lo
         self._per_joint = list(zip(lo.tolist(), hi.tolist(), C.tolist(), span.tolist(),
                                    (LIMIT_CLEARANCE * span).tolist(), strict=True))

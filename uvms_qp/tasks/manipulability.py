@@ -314,6 +314,9 @@ class ManipulabilityTask(Task):
                      else tuple(self._rows))
         self._nvh = model.n_vehicle
         self._zeros = [0.0] * model.n_vehicle  # vehicle columns of the floor row
+        k = sum(a in ("x", "y", "z") for a in axes)  # linear rows: [m] each, angular: [1]
+        self.error_unit = "1" if k == 0 else "m" if k == 1 else f"m^{k}"
+        self.rate_unit = f"{self.error_unit}/s" if self.mode == "floor" else "rad/s"
         n = model.n_joints
         self._select = np.zeros((n, model.nv))  # rows of ascend/shaping: qdot = ...
         self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0

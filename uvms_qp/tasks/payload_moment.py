@@ -93,6 +93,7 @@ class PayloadMomentTask(Task):
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
         self._nvh = model.n_vehicle
         self._zeros = [0.0] * model.n_vehicle  # vehicle columns of the bound row
+        self.rate_unit = "N m^2/s" if self.mode == "bound" else "rad/s"
         n = model.n_joints
         self._select = np.zeros((n, model.nv))  # rows of the reduce mode: qdot = ...
         self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0

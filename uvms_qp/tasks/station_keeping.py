@@ -112,6 +112,10 @@ class StationKeepingTask(ErrorTask):
         self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
         self._rows = EtaRows(model, self._eta_pos)
         self._hold(self._target_arg)
+        linear = any(a in ("x", "y", "z") for a in axes)
+        angular = any(a in ANGLE_AXES for a in axes)
+        self.error_unit = ", ".join(u for u, on in (("m", linear), ("rad", angular)) if on)
+        self.rate_unit = ", ".join(u for u, on in (("m/s", linear), ("rad/s", angular)) if on)
         return len(axes)
 
     def _hold(self, value: FloatArray | None) -> None:

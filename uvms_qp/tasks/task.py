@@ -58,7 +58,9 @@ class Task(ABC):
     Subclasses set the class attributes ``type_name`` (the scenario registry key), ``error_unit``
     (unit of the task error or objective, e.g. ``"m"``) and ``rate_unit`` (unit of the rows, e.g.
     ``"m/s"``), implement :meth:`_bind` (validation against the model; returns the row count) and
-    :meth:`fill`.
+    :meth:`fill`. The class units describe every configuration of the task; a task whose rows
+    depend on its mode or axes narrows them on the instance in :meth:`_bind` (a position-only
+    end-effector task reports ``"m/s"``), and the bound instance's units are the ones reported.
 
     Attributes:
         name: Unique name of the task inside a stack.
@@ -69,8 +71,8 @@ class Task(ABC):
     """
 
     type_name: ClassVar[str] = "task"
-    error_unit: ClassVar[str] = ""
-    rate_unit: ClassVar[str] = ""
+    error_unit: str = ""
+    rate_unit: str = ""
 
     def __init__(self, *, name: str | None = None, weight: float = 1.0) -> None:
         self.name = check_task_name(name, self.type_name)
