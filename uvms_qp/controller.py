@@ -555,18 +555,20 @@ class Controller:
         self._fill_box(state)
         for c, HA, Hlo, Hhi in self._row_slots:
             c.fill_rows(state, self.dt, HA, Hlo, Hhi)
-        if self._row_slots:
-            np.equal(self._Hlo, self._Hhi, out=self._hard_eq)
+        if self._inplace is not None and self._solver._backend is self._inplace_backend:
+            # the happy path of scheme "hqp" with DAQP, verified in place; a NaN or inf in any
+            # row or side makes it refuse the answer (its slacks are not finite), so bad rows
+            # always reach the check below, which names the task
+            inplace = self._inplace.solve()
+            if inplace is not None:
+                return self._inplace_result(inplace, t, start)
         A, lo, hi = self._A, self._lo, self._hi
         # lower sides hold finite values and -inf only, upper sides finite and +inf only, so
         # their sums are NaN exactly when a NaN is present
         if not math.isfinite(A.sum()) or math.isnan(lo.sum()) or math.isnan(hi.sum()):
             self._raise_non_finite()
-        inplace = None
-        if self._inplace is not None and self._solver._backend is self._inplace_backend:
-            inplace = self._inplace.solve()
-        if inplace is not None:  # the happy path of scheme "hqp" with DAQP: verified in place
-            return self._inplace_result(inplace, t, start)
+        if self._row_slots:
+            np.equal(self._Hlo, self._Hhi, out=self._hard_eq)
         np.equal(lo, hi, out=self._row_is_equality)
         problem = self._new_problem()
         if self.scheme == "nullspace":

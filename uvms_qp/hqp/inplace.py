@@ -164,8 +164,9 @@ class InPlaceDaqp:
         n = ws.n
         s = ws.slacks(raw, lo, hi)
         values = s.tolist()
-        if not math.isfinite(sum(values)):
-            self.rejected = "non-finite x"
+        if not math.isfinite(sum(values)):  # NaN/inf in x, in a row or in a side
+            self._hard_key = None  # do not warm-start from this solve
+            self.rejected = "non-finite x, rows or sides"
             return None
         box = values[:n]
         clipped = max(max(box), -min(box))
