@@ -32,15 +32,23 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray
+from .._validation import as_vector
+from ..errors import InputError
 from .daqp_native import NativeDaqp, native_available
 from .evaluate import evaluate_stacked
+from .registry import get_spec
 from .result import StackedResult, Status
 from .workspace import DAQP_INF, Workspace
 
 #: Largest box violation of DAQP's answer that is clipped away (as the back-end's lean path).
 BOX_ACCEPT = 1e-7
 _SOLVED = (1, 2)
+
+
+def _count(value: Any, name: str, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least:
+        raise InputError(f"{name}: expected an integer >= {least}, got {value!r}")
+    return int(value)
 
 
 def new_daqp_model() -> Any:
@@ -58,12 +66,28 @@ class InPlaceDaqp:
     Args:
         n: Number of variables.
         hard_rows: Number of hard general rows.
-        sizes: Rows per level, highest priority first.
+        sizes: Rows per level, highest priority first (each at least 1).
         W: Diagonal metric (n,) of the final regularisation ``min x' W x`` (positive).
-        settings: DAQP settings (``rho_soft``, ``time_limit``, ...).
+        settings: DAQP settings (``rho_soft``, ``time_limit``, ...); default: the registry's
+            settings of the ``"daqp"`` back-end.
         level_tol: Relative tolerance deciding that a level is met.
         hard_tol: Relative tolerance on the hard rows (also the bare acceptance threshold).
         name: Solver name recorded in results.
+
+    Raises:
+        InputError: a non-positive size, a negative hard row count, or a bad metric.
+
+    Example:
+        >>> import numpy as np
+        >>> from uvms_qp.hqp.inplace import InPlaceDaqp
+        >>> solver = InPlaceDaqp(2, 0, [1, 1], np.ones(2))
+        >>> rows, lo, hi = solver.ws.A[2:], solver.lo, solver.hi   # write these every tick
+        >>> rows[:] = [[1.0, 1.0], [1.0, -1.0]]
+        >>> lo[:2], hi[:2] = -1.0, 1.0                               # the box
+        >>> lo[2:] = hi[2:] = [1.0, 0.0]                             # two equality levels
+        >>> result = solver.solve()                                  # None: use a fallback
+        >>> np.round(result.x, 6).tolist()
+        [0.5, 0.5]
 
     Attributes:
         ws: The workspace: ``ws.A`` = ``[I; A_H; A_1; ...; A_p]`` (write rows ``ws.A[n:]``).
@@ -75,9 +99,22 @@ class InPlaceDaqp:
         clipped: Amount the latest accepted ``x`` was clipped into the box.
     """
 
-    def __init__(self, n: int, hard_rows: int, sizes: Sequence[int], W: FloatArray,
-                 settings: dict[str, Any], *, level_tol: float, hard_tol: float,
-                 name: str = "daqp") -> None:
+    def __init__(self, n: int, hard_rows: int, sizes: Sequence[int], W: Any = None,
+                 settings: dict[str, Any] | None = None, *, level_tol: float | None = None,
+                 hard_tol: float | None = None, name: str = "daqp") -> None:
+        spec = get_spec("daqp")
+        n = _count(n, "n", 1)
+        hard_rows = _count(hard_rows, "hard_rows", 0)
+        if not isinstance(sizes, list | tuple) or not sizes:
+            raise InputError(f"sizes: expected a non-empty list of row counts, got {sizes!r}")
+        sizes = [_count(m, f"sizes[{k}]", 1) for k, m in enumerate(sizes)]
+        W = np.ones(n) if W is None else as_vector(W, "W", n)
+        if np.any(W <= 0.0):
+            raise InputError(f"W: expected positive weights, got min {W.min():g}")
+        if settings is None:
+            settings = {k: v for k, v in spec.settings.items() if k != "rho_ladder"}
+        level_tol = spec.level_tol if level_tol is None else float(level_tol)
+        hard_tol = spec.hard_tol if hard_tol is None else float(hard_tol)
         self.ws = ws = Workspace(n, hard_rows, sizes)
         self.lo = np.zeros(ws.M)
         self.hi = np.zeros(ws.M)
