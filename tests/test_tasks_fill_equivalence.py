@@ -472,6 +472,10 @@ def test_state_plain_float_views_equal_the_arrays(model_name):
                                    rtol=0, atol=1e-12)
         np.testing.assert_allclose(state.vehicle_pose_jacobian(), ref.eta_jacobian(), rtol=0,
                                    atol=1e-12)
+        T_b = ref.pose("arm_base")
+        for frame in model.frames:
+            p = T_b[:3, :3].T @ (ref.pose(frame)[:3, 3] - T_b[:3, 3])
+            np.testing.assert_allclose(state.arm_position_floats(frame), p, rtol=0, atol=1e-12)
 
 
 def test_state_keeps_derived_values_per_state():

@@ -53,6 +53,7 @@ class JointPositionBounds(Constraint):
         self._lo = self._hi = np.zeros(0)
         self._lo_list: list[float] = []
         self._hi_list: list[float] = []
+        self._subset: list[int] | None = None  # constrained joints, None: all of them
 
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")
@@ -67,6 +68,8 @@ class JointPositionBounds(Constraint):
         self._cols = compact_index(model.n_vehicle + idx[finite])
         self._lo, self._hi = lo[finite], hi[finite]
         self._lo_list, self._hi_list = self._lo.tolist(), self._hi.tolist()
+        kept = idx[finite].tolist()
+        self._subset = None if kept == list(range(model.n_joints)) else kept
         return 0
 
     def joint_band(self, q: FloatArray, dt: float) -> tuple[FloatArray, FloatArray]:
@@ -87,7 +90,9 @@ class JointPositionBounds(Constraint):
         calls for the handful of joints of an arm), then ``max``/``min`` with the box.
         """
         cols = self._cols  # the lists below are sized at bind
-        q = state.joints[self._idx].tolist()
+        q = state.joint_floats()  # shared with the other consumers of this state
+        if self._subset is not None:
+            q = [q[i] for i in self._subset]
         k = self.gain / dt
         lower[cols] = [max(b, min((a - x) * k, 0.0)) for a, x, b in
                        zip(self._lo_list, q, lower[cols].tolist(), strict=False)]

@@ -247,6 +247,29 @@ class State:
             return Ja
         return Ja[_rows(rows)]
 
+    def arm_position_floats(self, frame: str = "tool") -> list[float]:
+        """Origin of ``frame`` in ``arm_base`` coordinates [m], 3 plain floats (cached).
+
+        ``R_wb^T (p_frame - p_arm_base)`` (equal up to rounding), read from the bare arm's
+        kinematics that :meth:`arm_jacobian` uses. For per-tick code such as the payload lever
+        arm (``003_229789978cc4b235.txt, Eq. (20)``).
+        """
+        key = ("arm_position", frame)
+        p = self.derived(key)
+        if p is None:
+            m = self.model
+            fid = m._arm_frame_ids.get(frame)
+            if fid is None:  # a frame the arm does not move: from the world poses
+                p = self.pose_in(frame, "arm_base")[:3, 3].tolist()
+            else:
+                arm, data = m._arm_model, m._arm_data
+                if m._arm_owner is not self:
+                    pin.computeJointJacobians(arm, data, self.q[m.nq_vehicle :])
+                    m._arm_owner = self
+                p = pin.updateFramePlacement(arm, data, fid).translation.tolist()
+            self.store(key, p)
+        return p  # type: ignore[no-any-return]
+
     def _arm_jacobian(self, frame: str) -> FloatArray:
         m = self.model
         fid = m._arm_frame_ids.get(frame)

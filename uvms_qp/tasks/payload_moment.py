@@ -108,15 +108,9 @@ class PayloadMomentTask(Task):
         return (x * x + y * y) * F, grad
 
     def _lever_arm(self, state: State) -> tuple[float, float]:
-        """``(x_E, y_E)`` [m]: the frame's origin in arm-base coordinates.
-
-        ``R_wb^T (p - t_wb)`` (first two entries) in plain floats.
-        """
-        (r00, r01, _, t0), (r10, r11, _, t1), (r20, r21, _, t2), _ = (
-            state.pose("arm_base").tolist())
-        p0, p1, p2 = state.position(self.frame).tolist()
-        d0, d1, d2 = p0 - t0, p1 - t1, p2 - t2
-        return r00 * d0 + r10 * d1 + r20 * d2, r01 * d0 + r11 * d1 + r21 * d2
+        """``(x_E, y_E)`` [m]: the frame's origin in arm-base coordinates (plain floats)."""
+        x, y, _ = state.arm_position_floats(self.frame)
+        return x, y
 
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:

@@ -55,8 +55,6 @@ class PostureTask(ErrorTask):
         self._idx = np.zeros(0, dtype=int)
         self._jsel: Any = self._idx
         self._q_ref: FloatArray | None = None
-        self._q_ref_list: list[float] | None = None
-        self._joint_list: list[int] = []
         self._A = np.zeros((0, 0))
 
     def _bind(self, model: Model) -> int:
@@ -73,16 +71,14 @@ class PostureTask(ErrorTask):
             self._posture_arg = 0.5 * (lo + hi)
         self._idx = idx
         self._jsel = compact_index(idx)
-        self._joint_list = idx.tolist()
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
         self._set_reference(self._posture_arg)
         return int(idx.size)
 
     def _set_reference(self, value: FloatArray | None) -> None:
-        """Set ``q_ref`` (a copy, also kept as plain floats for :meth:`fill`), or None."""
+        """Set ``q_ref`` (a copy), or None."""
         self._q_ref = None if value is None else value.copy()
-        self._q_ref_list = None if value is None else value.tolist()
 
     def reset(self) -> None:
         """Forget the activation posture."""
@@ -99,18 +95,17 @@ class PostureTask(ErrorTask):
              upper: FloatArray) -> None:
         """Write ``S zeta = K (q_ref - q)_S``.
 
-        The operations of :meth:`compute_error` per joint in plain floats (a handful of joints).
+        :meth:`compute_error` and the constant selector in one pass (the joint angles are
+        already an array: array operations cost no more than plain floats here).
         """
         if not self._fused:
             super().fill(state, t, A, lower, upper)
             return
-        q = state.joint_floats()
-        if self._q_ref_list is None:
-            self._set_reference(np.array([q[i] for i in self._joint_list]))
-        e = [r - q[i] for r, i in zip(self._q_ref_list, self._joint_list,  # type: ignore[arg-type]
-                                      strict=True)]
+        q = state.joints[self._jsel]
+        if self._q_ref is None:
+            self._set_reference(q)
         A[:] = self._A
-        self._set_sides_floats(e, lower, upper)
+        self._set_sides(self._q_ref - q, None, lower, upper)  # type: ignore[operator]
 
     def compute_jacobian(self, state: State, t: float) -> FloatArray:
         """Selector of the joint-rate columns (constant)."""
