@@ -20,7 +20,11 @@ convex; results are measured, never trusted, in :mod:`uvms_qp.hqp.evaluate`.
 
 from __future__ import annotations
 
+import ctypes
+import os
+import sys
 import warnings
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -32,6 +36,36 @@ from ..registry import SolverSpec
 from ..result import Status
 from . import BackendOutput
 from .certify import active_set_from, certified_point
+
+
+@cache
+def _mute_highs_banner() -> None:
+    """Construct one ``highspy.Highs`` with the process's C-level stdout sent to /dev/null.
+
+    HiGHS prints a copyright banner on the first construction in a process, before any option
+    can turn its output off; after that first construction it stays quiet (``output_flag``
+    false, as qpsolvers sets it). Called once, when a ``cascade:highs`` back-end is built.
+    """
+    try:
+        import highspy
+    except ImportError:  # pragma: no cover - the registry only offers installed back-ends
+        return
+    try:
+        libc_fflush = ctypes.CDLL(None).fflush
+    except (OSError, TypeError, AttributeError):  # pragma: no cover - no C runtime handle
+        return  # the banner is printed, nothing else changes
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            try:
+                highspy.Highs()
+            finally:
+                libc_fflush(None)  # the banner may sit in C's stdio buffer
+                os.dup2(saved, 1)
+    finally:
+        os.close(saved)
 
 
 def _null_space(M: FloatArray, rtol: float) -> tuple[FloatArray, int]:
@@ -109,6 +143,8 @@ class CascadeBackend:
         self.rescued = 0
         self._stopped = False  # a QP raised TimeoutError in this solve (deadline guard)
         self.settings = {**spec.settings, **opts}
+        if spec.qp_name == "highs":
+            _mute_highs_banner()
 
     # -- one QP -------------------------------------------------------------------------------
     def _qp(self, P: FloatArray, q: FloatArray, rows: _Rows, lb: FloatArray | None,
