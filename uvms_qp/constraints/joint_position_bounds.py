@@ -87,17 +87,24 @@ class JointPositionBounds(Constraint):
         """Intersect the joint-rate bounds into the box.
 
         The operations of :meth:`joint_band` per joint in plain floats (cheaper than array
-        calls for the handful of joints of an arm), then ``max``/``min`` with the box.
+        calls for the handful of joints of an arm), then one ``maximum``/``minimum`` per side
+        with the box (in place when the columns are consecutive).
         """
         cols = self._cols  # the lists below are sized at bind
         q = state.joint_floats()  # shared with the other consumers of this state
         if self._subset is not None:
             q = [q[i] for i in self._subset]
         k = self.gain / dt
-        lower[cols] = [max(b, min((a - x) * k, 0.0)) for a, x, b in
-                       zip(self._lo_list, q, lower[cols].tolist(), strict=False)]
-        upper[cols] = [min(b, max((a - x) * k, 0.0)) for a, x, b in
-                       zip(self._hi_list, q, upper[cols].tolist(), strict=False)]
+        band_lo = [min((a - x) * k, 0.0) for a, x in zip(self._lo_list, q, strict=False)]
+        band_hi = [max((b - x) * k, 0.0) for b, x in zip(self._hi_list, q, strict=False)]
+        if isinstance(cols, slice):  # views: intersect in place
+            view = lower[cols]
+            np.maximum(view, band_lo, out=view)
+            view = upper[cols]
+            np.minimum(view, band_hi, out=view)
+        else:
+            lower[cols] = np.maximum(lower[cols], band_lo)
+            upper[cols] = np.minimum(upper[cols], band_hi)
 
     def update(self, **params: Any) -> None:
         """Accepts ``gain``."""

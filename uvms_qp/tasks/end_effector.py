@@ -102,6 +102,7 @@ class EndEffectorTask(ErrorTask):
         self._need_o = mode != "position"
         self._Jlog = np.eye(3)
         self._sel_list: list[int] = []
+        self._all_axes = False
         self._work = np.zeros((6, 0))
         if position is not None or rotation is not None:
             self.set_target(position=position, rotation=rotation)
@@ -207,6 +208,7 @@ class EndEffectorTask(ErrorTask):
         self._sel_local = compact_index(sel - 3) if self.mode == "orientation" else self._sel
         self._all_position = self.mode == "position" and len(axes) == 3
         self._sel_list = sel.tolist()
+        self._all_axes = self._sel_list == [TWIST_AXES.index(a) for a in _MODE_AXES[self.mode]]
         linear = any(a in ("x", "y", "z") for a in axes)
         angular = any(a in ("rx", "ry", "rz") for a in axes)
         self.error_unit = ", ".join(u for u, on in (("m", linear), ("rad", angular)) if on)
@@ -248,13 +250,15 @@ class EndEffectorTask(ErrorTask):
         e6 = [0.0, 0.0, 0.0, *pin.log3(R_e).tolist()]
         # Jlog^T omega_d; a fixed target (omega_d = 0) skips the product
         ff6 = [0.0] * 6 if self._w_zero else [0.0, 0.0, 0.0, *(Jlog.T @ self._w_d).tolist()]
-        work = self._work
+        # every axis of the mode in order: the rows go straight into A (no work block)
+        work = A if self._all_axes and A.flags.c_contiguous else self._work
         if self._need_p:
             e6[:3] = (self._p_d - T[:3, 3]).tolist()  # type: ignore[operator]
             ff6[:3] = np.asarray(self._v_d).tolist()
             work[:3] = J[:3]
-        np.dot(Jlog, J[3:], out=work[3:])
-        A[:] = work[self._sel]
+        np.dot(Jlog, J[3:], out=work[3:] if self._need_p or work is not A else A)
+        if work is not A:
+            A[:] = work[self._sel]
         self._set_sides_floats([e6[i] for i in self._sel_list], lower, upper,
                                [ff6[i] for i in self._sel_list])
 

@@ -151,7 +151,7 @@ class JointLimitTask(Task):
         self._hi_list: list[float] = []
         self._lo_m_list: list[float] = []
         self._hi_m_list: list[float] = []
-        self._joint_list: list[int] = []
+        self._subset: list[int] | None = None  # regulated joints, None: all of them
         self._per_joint: list[tuple[float, float, float, float, float]] = []
         self.value = float("nan")
 
@@ -184,7 +184,8 @@ class JointLimitTask(Task):
                              f"limits of joint {model.joint_names[idx[j]]!r}")
         self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
         self._jsel = compact_index(idx)
-        self._joint_list = idx.tolist()
+        kept = idx.tolist()
+        self._subset = None if kept == list(range(model.n_joints)) else kept
         self.error_unit = "rad" if self.mode == "margin" else "1"  # distance or index H
         span = hi - lo
         self._per_joint = list(zip(lo.tolist(), hi.tolist(), C.tolist(), span.tolist(),
@@ -217,8 +218,9 @@ class JointLimitTask(Task):
         Per joint in plain floats (a handful of joints; lists sized at bind): the band, and
         the operations of :func:`joint_limit_index` in the same order.
         """
-        joints = state.joint_floats()
-        q = [joints[i] for i in self._joint_list]
+        q = state.joint_floats()  # shared with the other consumers of this state
+        if self._subset is not None:
+            q = [q[i] for i in self._subset]
         A[:] = self._A
         if self.mode == "margin":
             k = self.gain
