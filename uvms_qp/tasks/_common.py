@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from operator import itemgetter
 from typing import Any
 
 import numpy as np
@@ -186,19 +187,27 @@ class EtaRows:
         n_full = model.vehicle.nv  # row length of eta_jacobian_values (all vehicle rates)
         columns = model._eta_columns or list(range(model.n_vehicle))
         dst: list[int] = []
-        self.src: list[int] = []
+        src: list[int] = []
         for i, r in enumerate(rows):
             for c, rate in enumerate(model.actuated):
                 if (axes[r] in _POSITION_AXES) == (rate in _LINEAR_RATES):
                     dst.append(i * model.nv + c)
-                    self.src.append(r * n_full + columns[c])
+                    src.append(r * n_full + columns[c])
         self.dst = np.asarray(dst, dtype=np.intp)
+        # one C-level pick of the entries (a 1-tuple wrapper keeps a single entry a sequence)
+        self._pick: Callable[[Sequence[float]], Sequence[float]]
+        if len(src) > 1:
+            self._pick = itemgetter(*src)
+        elif src:
+            k = src[0]
+            self._pick = lambda values: (values[k],)
+        else:  # no actuated rate moves these coordinates: zero rows
+            self._pick = lambda values: ()
 
     def write(self, state: Any, A: FloatArray) -> None:
         """Write the rows at ``state`` into ``A`` (every entry)."""
-        values = state.eta_jacobian_values()
         A.fill(0.0)
-        A.put(self.dst, [values[k] for k in self.src])
+        A.put(self.dst, self._pick(state.eta_jacobian_values()))
 
 
 def vehicle_pose_jacobian(state: Any) -> FloatArray:

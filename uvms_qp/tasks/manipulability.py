@@ -76,26 +76,28 @@ def _position_gradient(cols: list[list[float]]) -> tuple[float, list[float]] | N
         return None
     w = math.sqrt(det)
     s = 1.0 / w
-    # per joint: c_j, w_j and the prefix term v_j . sum_{i<j} d_i
-    terms: list[tuple[float, float, float, float, float, float, float]] = []
+    # per joint: c_j and the prefix term v_j . sum_{i<j} d_i
+    cs: list[tuple[float, float, float]] = []
+    prefix: list[float] = []
     t0 = t1 = t2 = 0.0
     for v0, v1, v2, w0, w1, w2 in cols:
         p0 = (A0 * v0 + A1 * v1 + A2 * v2) * s
         p1 = (A1 * v0 + A4 * v1 + A5 * v2) * s
         p2 = (A2 * v0 + A5 * v1 + A8 * v2) * s
-        terms.append((v1 * p2 - v2 * p1, v2 * p0 - v0 * p2, v0 * p1 - v1 * p0, w0, w1, w2,
-                      v0 * t0 + v1 * t1 + v2 * t2))
+        cs.append((v1 * p2 - v2 * p1, v2 * p0 - v0 * p2, v0 * p1 - v1 * p0))
+        prefix.append(v0 * t0 + v1 * t1 + v2 * t2)
         t0 += p1 * w2 - p2 * w1
         t1 += p2 * w0 - p0 * w2
         t2 += p0 * w1 - p1 * w0
-    grad: list[float] = []
+    grad = [0.0] * n
     s0 = s1 = s2 = 0.0
-    for c0, c1, c2, w0, w1, w2, prefix in reversed(terms):  # w_i . sum_{j>=i} c_j
+    for i in range(n - 1, -1, -1):  # w_i . sum_{j>=i} c_j
+        c0, c1, c2 = cs[i]
         s0 += c0
         s1 += c1
         s2 += c2
-        grad.append((w0 * s0 + w1 * s1 + w2 * s2) + prefix)
-    grad.reverse()
+        col = cols[i]
+        grad[i] = (col[3] * s0 + col[4] * s1 + col[5] * s2) + prefix[i]
     return w, grad
 
 
