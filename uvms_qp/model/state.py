@@ -4,6 +4,12 @@ Construction runs Pinocchio's forward kinematics, joint Jacobians and frame plac
 (``computeJointJacobians`` + ``updateFramePlacements``); every getter after that is a cheap
 read, cached per frame. Returned arrays are read-only views of the cache: copy before modifying.
 
+A control tick reads a handful of numbers per task, where one numpy call costs more than the
+arithmetic itself; so the state also gives them as plain floats (:meth:`State.eta_floats`,
+:meth:`State.joint_floats`, :meth:`State.eta_jacobian_values`,
+:meth:`State.arm_position_floats`), computed once, and keeps values that one consumer derives
+for the others of the same tick (:meth:`State.store` / :meth:`State.derived`).
+
 The model's single Pinocchio ``Data`` buffer holds the kinematics of the most recent state; an
 older state that needs a frame not yet in its cache recomputes its own kinematics first, so
 states never read each other's numbers.
