@@ -222,9 +222,11 @@ class EndEffectorTask(ErrorTask):
         """Write ``J zeta = x_dot_d + K e`` (see the class docstring).
 
         Fuses :meth:`compute_error`, :meth:`compute_jacobian` and :meth:`compute_feedforward`
-        (the same operations): the error and feed-forward of the selected axes as plain floats
-        (at most six) in the orientation modes, whose rows ``Jlog(R_e) J_omega`` take one
-        product into a work block, then one selection into ``A``.
+        (the same operations). Position mode stays with arrays (its 3-vectors already are);
+        the orientation modes take the error and feed-forward of the selected axes as plain
+        floats (at most six) and the rows ``Jlog(R_e) J_omega`` from one product, written
+        straight into ``A`` when every axis of the mode is kept (else through a work block
+        and one selection).
         """
         if not self._fused:
             super().fill(state, t, A, lower, upper)
@@ -232,7 +234,7 @@ class EndEffectorTask(ErrorTask):
         self._sample(t)
         frame = self.frame
         J = state.jacobian(frame)
-        if self.mode == "position":  # 3-vectors already arrays: numpy is as cheap as floats
+        if self.mode == "position":
             e = self._p_d - state.position(frame)  # type: ignore[operator]
             if self._all_position:
                 A[:] = J[:3]
