@@ -498,15 +498,23 @@ def test_state_keeps_derived_values_per_state():
     assert s2.derived(("x", 1)) is None  # a new state starts empty
 
 
+@pytest.mark.parametrize("own_fill", [False, True])
 @pytest.mark.parametrize("case", ["ee_position", "ee_pose", "station_hold", "current_alignment",
                                   "attitude", "posture"])
-def test_a_subclass_overriding_compute_error_is_honoured_by_fill(case):
+def test_a_subclass_overriding_compute_error_is_honoured_by_fill(case, own_fill):
     model = MODELS["bluerov2_heavy_alpha5"]
     base = type(CASES[case](model))
 
     class Shifted(base):  # type: ignore[misc, valid-type]
         def compute_error(self, state, t):
             return super().compute_error(state, t) + 1.0
+
+    if own_fill:  # a subclass that also wraps fill still gets its own error
+        class Wrapped(Shifted):
+            def fill(self, state, t, A, lower, upper):
+                super().fill(state, t, A, lower, upper)
+
+        Shifted = Wrapped
 
     task = CASES[case](model)
     task.__class__ = Shifted

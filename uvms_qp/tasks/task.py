@@ -226,15 +226,17 @@ class ErrorTask(Task):
         self._fused = False
 
     def _defines_compute_methods(self) -> bool:
-        """True when the class that defines :meth:`fill` also defines the ``compute_*`` it uses.
+        """True when every class with its own :meth:`fill` sees the instance's ``compute_*``.
 
         Checked at bind: a fused ``fill`` (the same operations as the ``compute_*`` methods of
         its class) is valid only if no subclass replaced one of them.
         """
         cls = type(self)
-        owner = next(c for c in cls.__mro__ if "fill" in c.__dict__)
+        names = ("compute_error", "compute_jacobian", "compute_feedforward")
+        # every class below ErrorTask with its own fill must see the methods the instance has
         return all(getattr(cls, name) is getattr(owner, name)
-                   for name in ("compute_error", "compute_jacobian", "compute_feedforward"))
+                   for owner in cls.__mro__[: cls.__mro__.index(ErrorTask)]
+                   if "fill" in owner.__dict__ for name in names)
 
     def bind(self, model: Model) -> Task:
         """Bind (see :meth:`Task.bind`) and check the gain length against the row count."""
