@@ -250,7 +250,7 @@ class JointLimitTask(Task):
             scale = scale / norm if norm > 1e-12 else 0.0
         sides = [scale * x for x in g]
         lower[:] = sides
-        upper[:] = sides
+        upper[:] = lower
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

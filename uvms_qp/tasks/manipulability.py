@@ -377,7 +377,7 @@ class ManipulabilityTask(Task):
             scale *= self.shaping * switch
         sides = [scale * x for x in g]
         lower[:] = sides
-        upper[:] = sides
+        upper[:] = lower
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

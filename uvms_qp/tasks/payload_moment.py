@@ -139,7 +139,7 @@ class PayloadMomentTask(Task):
             scale = scale / norm if norm > 1e-12 else 0.0
         sides = [scale * v for v in g]
         lower[:] = sides
-        upper[:] = sides
+        upper[:] = lower
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

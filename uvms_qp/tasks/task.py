@@ -304,7 +304,7 @@ class ErrorTask(Task):
         if ff is not None:
             sides = [x + f for x, f in zip(sides, ff, strict=False)]
         lower[:] = sides
-        upper[:] = sides
+        upper[:] = lower
         self._last_error = np.array(e)
 
     def updatable(self) -> tuple[str, ...]:
