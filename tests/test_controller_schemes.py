@@ -180,7 +180,7 @@ def test_step_result_reports_residuals_with_units(rov):
     assert isinstance(result, StepResult)
     assert set(result.task_residuals) == {"reach", "posture", "station_keeping"}
     norm, unit = result.task_residuals["reach"]
-    assert unit == "m/s, rad/s" and norm >= 0.0
+    assert unit == "m/s" and norm >= 0.0  # position-only: rows in m/s
     assert result.task_errors["reach"][0] == pytest.approx(
         np.linalg.norm(state.position("tool")), rel=1e-12)
     text = result.summary()

@@ -210,8 +210,8 @@ class InPlaceDaqp:
         if clipped > BOX_ACCEPT:
             self.rejected = f"box violated by {clipped:.2e}"
             return None
-        if clipped:  # round-off outside the box: clip exactly and measure again
-            x = raw - s[:n]
+        if clipped:  # round-off outside the box: clip (raw - s would round) and measure again
+            x = np.minimum(np.maximum(raw, self._lo_box), self._hi_box)
             s = ws.slacks(x, lo, hi)
             values = s.tolist()
         else:
