@@ -146,9 +146,11 @@ def main() -> None:
     o_med, o_p99 = stats(t_ours[10:])
     s_med, s_p99 = stats(t_small[10:])
     p_med, p_p99 = stats(t_pink[10:])
-    # split of our step at a fixed state: state update, rows + bounds, solver
+    # split of our step at a fixed state: state update, rows + bounds, solve, result
     state = model.state(q0)
-    parts = {"state": [], "rows+bounds": [], "solve+evaluate": [], "back-end call": []}
+    parts = {"state": [], "rows+bounds": [], "in-place solve": [], "result": [],
+             "general path solve (reference)": []}
+    inplace = ctrl._inplace
     for _ in range(500):
         start = time.perf_counter()
         model.state(q0)
@@ -157,13 +159,18 @@ def main() -> None:
         ctrl._fill(state, 0.0)
         ctrl._fill_box(state)
         parts["rows+bounds"].append(time.perf_counter() - start)
+        if inplace is not None:
+            start = time.perf_counter()
+            solved = inplace.solve()
+            parts["in-place solve"].append(time.perf_counter() - start)
+            if solved is not None:
+                start = time.perf_counter()
+                ctrl._inplace_result(solved, 0.0, start)
+                parts["result"].append(time.perf_counter() - start)
         start = time.perf_counter()
-        ctrl._solver.solve_problem(ctrl._new_problem())
-        parts["solve+evaluate"].append(time.perf_counter() - start)
-        problem = ctrl._new_problem()
-        start = time.perf_counter()
-        ctrl._solver._backend.solve(problem)
-        parts["back-end call"].append(time.perf_counter() - start)
+        ctrl._safe.solve(ctrl._new_problem())
+        parts["general path solve (reference)"].append(time.perf_counter() - start)
+    parts = {k: v for k, v in parts.items() if v}
     print(f"model {model.name}, nv {model.nv}, {args.steps} interleaved steps, dt {DT} s")
     print(f"uvms-qp ({args.solver}, 4 levels, {sum(t.dim for t in ctrl.tasks)} task rows, "
           f"3 bound sets): median {o_med:7.1f} us  p99 {o_p99:7.1f} us  "

@@ -171,3 +171,31 @@ def test_round_off_outside_the_box_is_clipped_exactly():
     assert 0.0 < fast._inplace.clipped <= 1e-7
     assert np.all(result.zeta <= result.upper) and np.all(result.zeta >= result.lower)
     assert np.array_equal(result.zeta[active], result.upper[active])
+
+
+@pytest.mark.parametrize("solver", ["daqp", "cascade:quadprog"])
+def test_weight_update_at_run_time_reaches_the_solver(solver):
+    """Two conflicting posture tasks in one level: the joint rates are their weighted mean."""
+    from uvms_qp.model import load_model
+    from uvms_qp.stack import Level, Stack
+    from uvms_qp.tasks import PostureTask
+
+    model = load_model("bluerov2_heavy_alpha5")
+    q = model.home()
+    joints = model.split(q)[1]
+    a = PostureTask(posture=(joints + 0.2).tolist(), gain=1.0, name="a")
+    b = PostureTask(posture=(joints - 0.2).tolist(), gain=1.0, name="b")
+    ctrl = Controller(model, Stack(levels=[Level(a, b)]), solver=solver, dt=0.05)
+    state = model.state(q)
+    nj = model.n_joints
+    for wa, wb in ((1.0, 1.0), (3.0, 1.0), (1.0, 4.0)):
+        a.update(weight=wa)
+        b.update(weight=wb)
+        result = ctrl.step(state, 0.0)
+        rates = result.zeta[-nj:]
+        # the reported level residual is the weighted one, with the new weights
+        ra, rb = rates - 0.2, rates + 0.2  # row values minus targets (K = 1)
+        weighted = np.sqrt(wa * ra @ ra + wb * rb @ rb)
+        assert result.hierarchy.level_residuals[0] == pytest.approx(weighted, rel=1e-9)
+        if solver != "daqp":  # DAQP ignores per-row weights on an unmet level (docs/solver.md)
+            np.testing.assert_allclose(rates, (wa * 0.2 - wb * 0.2) / (wa + wb), atol=1e-7)

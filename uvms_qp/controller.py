@@ -28,6 +28,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
+from operator import attrgetter, is_
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -50,6 +51,7 @@ from .tasks.task import Task
 if TYPE_CHECKING:  # pragma: no cover
     from .model import Model, State
 
+_ROW_WEIGHTS = attrgetter("row_weights")
 Scheme = Literal["hqp", "weighted", "nullspace"]
 SCHEMES: tuple[str, ...] = ("hqp", "weighted", "nullspace")
 #: Rank decision of the ``"nullspace"`` scheme (see :func:`uvms_qp.hqp.backends.nullspace.
@@ -497,6 +499,8 @@ class Controller:
     def _fill(self, state: State, t: float) -> None:
         for task, A, lo, hi in self._slots:
             task.fill(state, t, A, lo, hi)
+        if all(map(is_, map(_ROW_WEIGHTS, self._tasks), self._weight_refs)):
+            return  # no weight changed since the last tick (one C-level pass)
         w = self._w
         for k, task in enumerate(self._tasks):
             rw = task.row_weights
