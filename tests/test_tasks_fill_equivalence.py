@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from reference_kinematics import reference_manipulability
 
 from uvms_qp.errors import InputError
 from uvms_qp.model import bundled_models, load_model
@@ -120,27 +121,6 @@ def joint_selector(model, idx):
     return S
 
 
-def manipulability(J6, rows):
-    """``w = sqrt(det(J_S J_S^T))`` and ``dw/dq_i = w trace(dJ_S/dq_i J_S^+)`` (Eq. (18)-(19))."""
-    Js = J6[rows]
-    k, n = Js.shape
-    G = Js @ Js.T if k <= n else Js.T @ Js
-    w = math.sqrt(max(np.linalg.det(G), 0.0))
-    pinv = np.linalg.pinv(Js)
-    V, W = J6[:3], J6[3:]
-    grad = np.zeros(n)
-    for i in range(n):
-        dJ = np.zeros((6, n))
-        for j in range(n):
-            if i <= j:
-                dJ[:3, j] = np.cross(W[:, i], V[:, j])
-                dJ[3:, j] = np.cross(W[:, i], W[:, j])
-            else:
-                dJ[:3, j] = np.cross(W[:, j], V[:, i])
-        grad[i] = w * np.trace(dJ[rows] @ pinv)
-    return w, grad
-
-
 # ------------------------------------------------------------------------- reference rows
 class Line:
     """A straight-line trajectory; with ``spin`` also a rotation about a fixed world axis."""
@@ -204,8 +184,8 @@ def ref_station_keeping(task, ref, t, memory):
         if a in ("phi", "theta", "psi"):
             e[i] = wrap(e[i])
     if task.blend is not None:
-        w, _ = manipulability(ref.arm_jacobian(), [0, 1] if ref.model.vehicle_kind == "planar"
-                              else [0, 1, 2])
+        rows = [0, 1] if ref.model.vehicle_kind == "planar" else [0, 1, 2]
+        w, _ = reference_manipulability(ref.arm_jacobian(), rows)
         e = e * (1.0 - shaping_function(w, task._blend_task.threshold))
     return ref.eta_jacobian()[idx], np.multiply(task.gain, e), None
 
@@ -237,7 +217,7 @@ def ref_posture(task, ref, t, memory):
 def ref_manipulability(task, ref, t, memory):
     m = ref.model
     rows = [_TWIST.index(a) for a in task.axes]
-    w, g = manipulability(ref.arm_jacobian(task.frame), rows)
+    w, g = reference_manipulability(ref.arm_jacobian(task.frame), rows)
     if task.mode == "floor":
         A = np.zeros((1, m.nv))
         A[0, m.n_vehicle:] = g
