@@ -78,7 +78,8 @@ class SoakReport:
             "stages: " + ", ".join(f"{k} {v} ({100 * v / total:.3g} %)"
                                    for k, v in self.stages.most_common()),
             "statuses: " + ", ".join(f"{k} {v}" for k, v in self.statuses.most_common()),
-            "faults injected: " + ", ".join(f"{k} {v}" for k, v in self.faults.items()),
+            "faults injected: " + (", ".join(f"{k} {v}" for k, v in self.faults.items())
+                                   or "none (the primary back-end is not wrapped)"),
             f"tracemalloc growth after warm-up: {self.memory_growth / 1024:.1f} KiB",
             f"step time median first cycle {self.median_first_us:.1f} us, last cycle "
             f"{self.median_last_us:.1f} us (drift {self.drift:+.1%}); p99 {self.p99_us:.1f} us, "
@@ -123,7 +124,11 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
     ctrl = Controller(model, scenario.stack, solver=solver, dt=dt, metric=scenario.metric,
                       deadline=deadline)
     assert ctrl.safe is not None
-    faults = inject_random(ctrl.safe.primary, fault_rate, fault_rng, sleep=sleep)
+    # a wrapped primary back-end is always called through the controller's general path (the
+    # in-place DAQP solve is the unwrapped back-end's own); with no faults to inject, nothing is
+    # wrapped and the soak runs the controller's real path
+    faults = (inject_random(ctrl.safe.primary, fault_rate, fault_rng, sleep=sleep)
+              if fault_rate > 0 else None)
     tool = scenario.task("tool")
     payload = scenario.task("payload")
     lower_q, upper_q = model.joint_lower, model.joint_upper
@@ -146,9 +151,9 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
         if trace_memory and k == warmup:
             tracemalloc.start()
             baseline = tracemalloc.get_traced_memory()[0]
-        n_faults = faults.n_faults
+        n_faults = faults.n_faults if faults is not None else 0
         res = ctrl.step(model.state(q), k * dt)
-        faulted[k] = faults.n_faults != n_faults
+        faulted[k] = faults is not None and faults.n_faults != n_faults
         times[k] = res.step_time
         zeta = res.zeta
         report.stages[res.stage] += 1
@@ -174,7 +179,8 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
         tracemalloc.stop()
     report.wall = time.perf_counter() - started
     report.steps = steps
-    report.faults = {str(kind): n for kind, n in faults.by_kind.items()}
+    report.faults = ({str(kind): n for kind, n in faults.by_kind.items()}
+                     if faults is not None else {})
     start = -(-warmup // restart) * restart  # first cycle after the warm-up
     cycles = max((steps - start) // restart, 0)
     clean = ~faulted
