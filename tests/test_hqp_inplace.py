@@ -77,3 +77,42 @@ def test_matches_solve_hierarchy_over_a_drifting_sequence():
             assert got.hard_violation <= 1e-9
             assert got.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
     assert accepted >= 140  # of 150 calls
+
+
+def _load_into(solver: InPlaceDaqp, problem) -> None:
+    ws = solver.ws
+    solver.ws.A[ws.n:ws.head] = problem.hard.A
+    solver.ws.A[ws.head:] = np.vstack([b.A for b in problem.levels])
+    solver.lo[:ws.n], solver.hi[:ws.n] = problem.lower, problem.upper
+    solver.lo[ws.n:ws.head], solver.hi[ws.n:ws.head] = problem.hard.lo, problem.hard.hi
+    solver.lo[ws.head:] = np.concatenate([b.lo for b in problem.levels])
+    solver.hi[ws.head:] = np.concatenate([b.hi for b in problem.levels])
+    solver.w[:] = np.concatenate([b.w for b in problem.levels])
+
+
+def test_rho_soft_ladder_solves_a_recorded_early_stop():
+    """A demo-soak tick where DAQP stops early at rho_soft 1e-8 (exit flag 3): the in-place
+    solver walks the back-end's ladder and matches the back-end's general path."""
+    from pathlib import Path
+
+    from regressions.corpus import load_problem
+
+    from uvms_qp.hqp import HierarchySolver
+
+    problem, _ = load_problem(Path(__file__).parent / "regressions" / "demo_daqp_rho_ladder.npz")
+    sizes = [b.A.shape[0] for b in problem.levels]
+    bare = InPlaceDaqp(problem.n, problem.hard.A.shape[0], sizes, problem.W, rho_ladder=())
+    _load_into(bare, problem)
+    assert bare.solve() is None and bare.rejected == "DAQP exit flag 3"
+    solver = InPlaceDaqp(problem.n, problem.hard.A.shape[0], sizes, problem.W)
+    _load_into(solver, problem)
+    result = solver.solve()
+    assert result is not None and result.ok
+    assert result.info["rho_soft"] != 1e-8
+    assert solver.settings["rho_soft"] == solver._model.settings["rho_soft"] == 1e-8  # restored
+    reference = HierarchySolver("daqp", weights=problem.W).solve_problem(problem)
+    assert reference.info["rho_soft"] == result.info["rho_soft"]
+    np.testing.assert_allclose(result.x, reference.x, atol=1e-9)
+    assert result.status == reference.status
+    # the next tick starts from the first rho_soft again and still answers
+    assert solver.solve() is not None

@@ -397,7 +397,7 @@ class Controller:
             return None
         return InPlaceDaqp(self.nv, hard_rows, sizes, self.metric, backend.daqp_settings,
                            level_tol=self._solver.level_tol, hard_tol=self._solver.hard_tol,
-                           name=self.solver_name)
+                           rho_ladder=backend.rho_ladder, name=self.solver_name)
 
     def _make_problem(self) -> Problem:
         """Problem whose blocks are views of the row buffers (filled in place every tick)."""

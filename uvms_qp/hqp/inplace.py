@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_vector
+from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from .daqp_native import NativeDaqp, native_available
 from .evaluate import evaluate_stacked
@@ -43,6 +43,7 @@ from .workspace import DAQP_INF, Workspace
 #: Largest box violation of DAQP's answer that is clipped away (as the back-end's lean path).
 BOX_ACCEPT = 1e-7
 _SOLVED = (1, 2)
+_NO_RETRY = (-1, -7)  # empty hard set, time limit: another rho_soft cannot help
 
 
 def _count(value: Any, name: str, least: int) -> int:
@@ -70,6 +71,10 @@ class InPlaceDaqp:
         W: Diagonal metric (n,) of the final regularisation ``min x' W x`` (positive).
         settings: DAQP settings (``rho_soft``, ``time_limit``, ...); default: the registry's
             settings of the ``"daqp"`` back-end.
+        rho_ladder: Other ``rho_soft`` values tried in order, each from a cold start, when a
+            solve stops early (DAQP's exit flag 3, a level it could not finish, or another
+            failure that is not an empty hard set or a time limit); default: the registry's
+            ladder, the one the back-end walks on its general path.
         level_tol: Relative tolerance deciding that a level is met.
         hard_tol: Relative tolerance on the hard rows (also the bare acceptance threshold).
         name: Solver name recorded in results.
@@ -101,7 +106,8 @@ class InPlaceDaqp:
 
     def __init__(self, n: int, hard_rows: int, sizes: Sequence[int], W: Any = None,
                  settings: dict[str, Any] | None = None, *, level_tol: float | None = None,
-                 hard_tol: float | None = None, name: str = "daqp") -> None:
+                 hard_tol: float | None = None, rho_ladder: Sequence[float] | None = None,
+                 name: str = "daqp") -> None:
         spec = get_spec("daqp")
         n = _count(n, "n", 1)
         hard_rows = _count(hard_rows, "hard_rows", 0)
@@ -113,6 +119,8 @@ class InPlaceDaqp:
             raise InputError(f"W: expected positive weights, got min {W.min():g}")
         if settings is None:
             settings = {k: v for k, v in spec.settings.items() if k != "rho_ladder"}
+        if rho_ladder is None:
+            rho_ladder = spec.settings.get("rho_ladder", ())
         level_tol = spec.level_tol if level_tol is None else float(level_tol)
         hard_tol = spec.hard_tol if hard_tol is None else float(hard_tol)
         self.ws = ws = Workspace(n, hard_rows, sizes)
@@ -130,7 +138,9 @@ class InPlaceDaqp:
         self._native = False
         self._hard_eq = np.zeros(ws.mh, dtype=bool)
         self._hard_key: bytes | None = None
-        self._rho_soft = self.settings.get("rho_soft")
+        self._rho_soft = float(self.settings.get("rho_soft", 1e-8))
+        self.rho_ladder = tuple(float(r) for r in rho_ladder if float(r) != self._rho_soft)
+        self._sense0 = np.zeros(ws.M, dtype=np.intc)
         # persistent views (basic slicing once, not every tick)
         self._lo_box, self._hi_box = self.lo[:n], self.hi[:n]
         self._lo_hard, self._hi_hard = self.lo[n:ws.head], self.hi[n:ws.head]
@@ -143,6 +153,7 @@ class InPlaceDaqp:
         ws = self.ws
         sense = np.zeros(ws.M, dtype=np.intc)
         sense[ws.n: ws.head][hard_eq] = 5  # hard equality rows: active and immutable
+        self._sense0 = sense.copy()  # the cold-start working set of the retries
         bp = np.unique(np.cumsum((ws.head, *ws.sizes))).astype(np.intc)
         model = new_daqp_model()
         flag = int(model.setup(np.diag(self.W), np.zeros(ws.n), ws.daqp_A, ws.bu, ws.bl, sense,
@@ -156,6 +167,40 @@ class InPlaceDaqp:
         self._model = model
         self._native = isinstance(model, NativeDaqp)
         return flag
+
+    def _run(self, model: Any) -> tuple[FloatArray, int, float, int]:
+        """One DAQP solve: ``(x, exit flag, C solve time [s], iterations)``."""
+        if self._native:
+            flag = model.solve_in_place()
+            return model.x, flag, model.solve_time, model.iterations
+        raw, _, flag, extra = model.solve()
+        return raw, flag, extra["solve_time"], extra["iterations"]
+
+    def _set_rho(self, model: Any, rho: float) -> None:
+        settings = model.settings
+        settings["rho_soft"] = rho
+        model.settings = settings
+
+    def _retry(self, model: Any, c_time: float,
+               iterations: int) -> tuple[FloatArray, int, float, int, float]:
+        """Walk :attr:`rho_ladder` from cold starts (as the back-end's general path does).
+
+        Returns the last attempt's ``(x, flag)``, the summed C time and iterations, and the
+        ``rho_soft`` of the last attempt; ``rho_soft`` is restored for the next tick.
+        """
+        raw, flag, rho = model.x, 0, self._rho_soft
+        try:
+            for rho in self.rho_ladder:
+                self._set_rho(model, rho)
+                model.update(sense=self._sense0.copy())  # cold start
+                raw, flag, t, it = self._run(model)
+                c_time += t
+                iterations += it
+                if flag in _SOLVED or flag in _NO_RETRY:
+                    break
+        finally:
+            self._set_rho(model, self._rho_soft)
+        return raw, flag, c_time, iterations, rho
 
     def solve(self) -> StackedResult | None:
         """Solve the problem in the buffers; the accepted result, or None (see :attr:`rejected`).
@@ -185,13 +230,10 @@ class InPlaceDaqp:
             model.refresh()
         else:
             model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
-        if self._native:
-            flag = model.solve_in_place()
-            raw = model.x
-            c_time, iterations = model.solve_time, model.iterations
-        else:
-            raw, _, flag, extra = model.solve()
-            c_time, iterations = extra["solve_time"], extra["iterations"]
+        raw, flag, c_time, iterations = self._run(model)
+        rho = self._rho_soft
+        if flag not in _SOLVED and flag not in _NO_RETRY and self.rho_ladder:
+            raw, flag, c_time, iterations, rho = self._retry(model, c_time, iterations)
         if flag not in _SOLVED:
             self._hard_key = None  # set up afresh next time
             self.rejected = f"DAQP exit flag {flag}"
@@ -227,7 +269,7 @@ class InPlaceDaqp:
         self.clipped = clipped
         self.rejected = ""
         info = {"exitflag": flag, "daqp_solve_time": c_time, "iterations": iterations,
-                "rho_soft": self._rho_soft}
+                "rho_soft": rho}
         result = evaluate_stacked(ws, x, s, lo.copy(), hi.copy(), self.w, hv, self.name,
                                   Status.OPTIMAL, "", level_tol=self.level_tol,
                                   hard_tol=self.hard_tol, solve_time=perf_counter() - start,

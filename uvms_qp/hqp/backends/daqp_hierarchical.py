@@ -101,6 +101,11 @@ class DaqpHierarchicalBackend:
         self._key = None
 
     @property
+    def rho_ladder(self) -> tuple[float, ...]:
+        """The ``rho_soft`` values tried after the first one when a solve fails, in order."""
+        return tuple(self._ladder[1][1:])
+
+    @property
     def daqp_settings(self) -> dict[str, Any]:
         """The DAQP settings every set-up applies (registry values merged with the options)."""
         return dict(self._daqp_settings)
