@@ -61,7 +61,8 @@ _FLAGS = {
     -6: "initial working set overdetermined",
     -7: "time limit reached",
     -8: "setup failed",
-    3: "stalled on a point that violates a hard row (after every rho_soft retry)",
+    3: ("stopped early at a level it could not finish, or on a point that violates a hard "
+        "row (after every rho_soft retry)"),
 }
 
 
