@@ -13,6 +13,7 @@ Also: the per-instance units of the rows and errors.
 from __future__ import annotations
 
 import math
+import zlib
 
 import numpy as np
 import pinocchio as pin
@@ -40,6 +41,10 @@ MODELS = {name: load_model(name) for name in bundled_models()}
 TICKS = 6
 DT = 0.1
 RTOL = 1e-10
+#: manipulability rows: near a singular arm configuration both the fast gradient and the
+#: reference trace formula lose digits with the conditioning of J J^T (1.3e-7 seen over 40 seeds
+#: of random configurations); a wrong formula is off by O(1)
+RTOL_MANIPULABILITY = 1e-6
 _TWIST = ("x", "y", "z", "rx", "ry", "rz")
 _PIN_VELOCITY = {"spatial": "uvwpqr", "planar": "uvr", "fixed": ""}
 
@@ -353,6 +358,7 @@ def _configurations(model, seed):
 
 def _check(task, model, qs, extra=None):
     reference = REFERENCES[type(task)]
+    rtol = RTOL_MANIPULABILITY if isinstance(task, ManipulabilityTask) else RTOL
     memory: dict = {}
     for k, q in enumerate(qs):
         t = DT * k
@@ -363,9 +369,9 @@ def _check(task, model, qs, extra=None):
         A, lo, hi = reference(task, Ref(model, q), t, memory)
         hi = lo if hi is None else hi
         scale = 1.0 + np.abs(A).max()
-        np.testing.assert_allclose(rows.A, A, rtol=RTOL, atol=RTOL * scale)
+        np.testing.assert_allclose(rows.A, A, rtol=rtol, atol=rtol * scale)
         for got, want in ((rows.lower, lo), (rows.upper, hi)):
-            np.testing.assert_allclose(got, want, rtol=RTOL, atol=RTOL * (1.0 + np.abs(
+            np.testing.assert_allclose(got, want, rtol=rtol, atol=rtol * (1.0 + np.abs(
                 want[np.isfinite(want)]).max(initial=0.0)))
         if "weights" in memory:
             np.testing.assert_allclose(rows.weights, memory["weights"], rtol=RTOL)
@@ -379,7 +385,7 @@ def test_every_case_applies_somewhere():
 def test_rows_equal_the_first_principles_rows(model_name, case):
     model = MODELS[model_name]
     task = CASES[case](model).bind(model)
-    _check(task, model, _configurations(model, seed=hash(case) % 1000))
+    _check(task, model, _configurations(model, seed=zlib.crc32(case.encode()) % 1000))
 
 
 @pytest.mark.parametrize("model_name", ["bluerov2_heavy_alpha5", "wang_9dof", "soylu_planar"])
