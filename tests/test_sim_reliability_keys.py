@@ -6,38 +6,18 @@ import tomllib
 
 import numpy as np
 import pytest
+from scenario_text import bluerov_scenario
 
 from uvms_qp.errors import ConfigError, InputError, NoSolutionFound
 from uvms_qp.safety.faults import Fault, inject
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import Scenario, scenario_from_dict
 
-BASE = """
-model = "bluerov2_heavy_alpha5"
-dt = 0.1
-duration = 0.5
-
-[initial]
-joints = [3.14159, 1.2, 1.7, 3.14159]
-
-[[constraints]]
-type = "joint_velocity_bounds"
-
-[[constraints]]
-type = "vehicle_rate_bounds"
-linear = 0.2
-angular = 0.2
-
-[[levels]]
-[[levels.tasks]]
-type = "end_effector"
-name = "tool"
-position = [0.4911, 0.0990, -0.1675]
-
+BASE = bluerov_scenario("duration = 0.5", """
 [[levels]]
 [[levels.tasks]]
 type = "station_keeping"
-"""
+""")
 
 
 def load(head: str = "") -> Scenario:

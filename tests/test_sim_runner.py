@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from scenario_text import bluerov_scenario
 
 import uvms_qp
 from uvms_qp import Level, Stack
@@ -20,29 +21,7 @@ from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import Event, Phase, Scenario, scenario_from_dict
 from uvms_qp.tasks import EndEffectorTask, PayloadMomentTask, StationKeepingTask
 
-SMALL = """
-model = "bluerov2_heavy_alpha5"
-dt = 0.1
-duration = 1.0
-tracking = "tool"
-
-[initial]
-joints = [3.14159, 1.2, 1.7, 3.14159]
-
-[[constraints]]
-type = "joint_velocity_bounds"
-
-[[constraints]]
-type = "vehicle_rate_bounds"
-linear = 0.2
-angular = 0.2
-
-[[levels]]
-[[levels.tasks]]
-type = "end_effector"
-name = "tool"
-position = [0.4911, 0.0990, -0.1675]
-
+SMALL = bluerov_scenario("duration = 1.0\ntracking = \"tool\"", """
 [[levels]]
 [[levels.tasks]]
 type = "payload_moment"
@@ -63,7 +42,7 @@ update = { force = 5.0 }
 name = "late"
 start = 0.5
 end = 1.0
-"""
+""")
 
 
 @pytest.fixture
