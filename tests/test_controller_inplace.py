@@ -40,14 +40,16 @@ def test_in_place_path_matches_general_path_on_random_problems():
             steps += 1
             used += fast._inplace.rejected == ""
             assert a.status == b.status, (seed, k)
-            np.testing.assert_allclose(a.zeta, b.zeta, rtol=0, atol=1e-10, err_msg=f"{seed}")
+            # the same answers to DAQP's accuracy (a tick the in-place solve declines is
+            # answered by each controller's own general path, warm-started differently)
+            np.testing.assert_allclose(a.zeta, b.zeta, rtol=0, atol=1e-8, err_msg=f"{seed}")
             np.testing.assert_allclose(a.lower, b.lower)
             np.testing.assert_allclose(a.upper, b.upper)
             for name, (r, unit) in b.task_residuals.items():
                 assert a.task_residuals[name][1] == unit
-                assert a.task_residuals[name][0] == pytest.approx(r, abs=1e-9), (seed, name)
+                assert a.task_residuals[name][0] == pytest.approx(r, abs=1e-8), (seed, name)
             np.testing.assert_allclose(a.hierarchy.level_residuals,
-                                       b.hierarchy.level_residuals, atol=1e-9)
+                                       b.hierarchy.level_residuals, atol=1e-8)
             assert a.bound_violation <= 1e-9
             assert np.all(a.zeta >= a.lower) and np.all(a.zeta <= a.upper)
             q = draw.model.integrate(q, a.zeta, draw.dt)
@@ -197,5 +199,5 @@ def test_weight_update_at_run_time_reaches_the_solver(solver):
         ra, rb = rates - 0.2, rates + 0.2  # row values minus targets (K = 1)
         weighted = np.sqrt(wa * ra @ ra + wb * rb @ rb)
         assert result.hierarchy.level_residuals[0] == pytest.approx(weighted, rel=1e-9)
-        if solver != "daqp":  # DAQP ignores per-row weights on an unmet level (docs/solver.md)
-            np.testing.assert_allclose(rates, (wa * 0.2 - wb * 0.2) / (wa + wb), atol=1e-7)
+        # the weighted compromise on every back-end (DAQP through per-row soft weights)
+        np.testing.assert_allclose(rates, (wa * 0.2 - wb * 0.2) / (wa + wb), atol=1e-7)

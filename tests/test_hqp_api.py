@@ -116,20 +116,26 @@ def test_scalings(name, scale):
     assert result.x == pytest.approx(base * scale, rel=1e-6, abs=1e-6 * scale)
 
 
-def test_daqp_row_normalisation_documented_difference():
-    """For an unmet level DAQP minimises sum (s_i / |a_i|)^2: row scale and weight do not matter.
+def test_daqp_weights_mean_what_they_mean_on_the_cascades():
+    """An unmet level: DAQP minimises the weighted violation sum w_i s_i^2, like a cascade.
 
-    Same rows as weights 1/|a_i|^2 on a cascade reproduce DAQP's compromise exactly.
+    Without per-row soft weights DAQP would return 0.5 here (it normalises rows: the compromise
+    of weights 1/|a_i|^2, whatever w); uvms_qp.hqp.daqp_weights gives it the weighted one.
     """
     A = np.array([[1.0, 0.0], [10.0, 0.0]])
     b = np.array([0.0, 10.0])  # x0 = 0 and 10 x0 = 10 conflict
-    daqp = solve_hierarchy([[Rows.equality(A, b, weights=[1.0, 7.0])]], solver="daqp")
-    plain = solve_hierarchy([[(A, b)]], solver="cascade:quadprog")
-    normalised = solve_hierarchy(
-        [[Rows.equality(A, b, weights=1.0 / np.sum(A * A, axis=1))]], solver="cascade:quadprog")
-    assert plain.x[0] == pytest.approx(100.0 / 101.0, abs=1e-8)  # the weighted semantics
-    assert daqp.x[0] == pytest.approx(0.5, abs=1e-6)  # DAQP's row-normalised semantics
-    assert daqp.x[0] == pytest.approx(normalised.x[0], abs=1e-6)
+    for weights, expected in (([1.0, 1.0], 100.0 / 101.0), ([1.0, 7.0], 700.0 / 701.0),
+                              ([100.0, 1.0], 100.0 / 200.0)):
+        daqp = solve_hierarchy([[Rows.equality(A, b, weights=weights)]], solver="daqp")
+        cascade = solve_hierarchy([[Rows.equality(A, b, weights=weights)]],
+                                  solver="cascade:quadprog")
+        assert cascade.x[0] == pytest.approx(expected, abs=1e-8)
+        assert daqp.x[0] == pytest.approx(expected, abs=1e-8)
+        assert daqp.level_residuals[0] == pytest.approx(cascade.level_residuals[0], rel=1e-8)
+    # row scaling does not change the weighted compromise either
+    scaled = solve_hierarchy([[Rows.equality(A * 1e3, b * 1e3, weights=[1.0, 7.0])]],
+                             solver="daqp")
+    assert scaled.x[0] == pytest.approx(700.0 / 701.0, abs=1e-8)
 
 
 @pytest.mark.parametrize("name", ["nullspace", *EXACT])

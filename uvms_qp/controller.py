@@ -9,8 +9,10 @@ into buffers allocated once (no per-tick assembly of the problem), solves, and r
 * ``"weighted"``: one weighted QP, priorities turned into weights (level ``k`` of ``p`` gets its
   squared violations multiplied by ``priority_ratio ** (p - 1 - k)``), same hard bounds: the
   usual "soft priorities" of weighted differential IK, for comparison. ``solver="daqp"`` is run
-  as the plain QP ``"cascade:daqp"`` (DAQP's hierarchical mode normalises soft rows and would
-  ignore the weights); very large ratios make the QP ill-conditioned (1e2-1e4 work well);
+  as the plain QP ``"cascade:daqp"`` (in DAQP's hierarchical mode the priority weights would
+  become soft weights spanning ``priority_ratio ** (p - 1)``, far more than its soft-row
+  regularisation resolves accurately); very large ratios make the QP ill-conditioned (1e2-1e4
+  work well);
 * ``"nullspace"``: the closed-form recursive null-space scheme
   (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels, in the metric W of Eq. (17)):
   inequality rows are left out (the scheme has no notion of them) and the result is saturated
@@ -288,8 +290,8 @@ class Controller:
         if scheme == "nullspace":
             solver = "nullspace"
         elif scheme == "weighted" and solver == "daqp":
-            # DAQP's hierarchical mode normalises soft rows, which would erase the priority
-            # weights; one weighted QP through DAQP as a plain QP keeps them.
+            # as soft weights of one DAQP level the priority weights would span more orders of
+            # magnitude than its soft-row regularisation resolves; DAQP as a plain QP is exact
             solver = "cascade:daqp"
         self.strict = bool(strict)
         if scheme == "nullspace":

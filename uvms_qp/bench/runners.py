@@ -9,8 +9,8 @@ A :class:`Runner` turns one :class:`~uvms_qp.bench.sets.BenchProblem` into one
 * ``nullspace``: the closed-form recursive null-space scheme
   (``000_7b5f597fe4e36aa4.txt, Eq. (10)``), on problems whose levels are all equalities;
 * ``weighted``: the same stack as ONE weighted QP (level ``k`` of ``p`` weighted by
-  ``1e4 ** (p - 1 - k)``), solved by ``cascade:daqp`` (a plain QP; DAQP's hierarchical mode
-  normalises rows and would ignore the weights);
+  ``1e4 ** (p - 1 - k)``), solved by ``cascade:daqp`` (a plain QP: as soft weights of one DAQP
+  level, the priority weights would span more orders than its soft-row regularisation resolves);
 * ``scheme:<name>``: the papers' closed-form schemes (:data:`uvms_qp.schemes.SCHEME_TYPES`) on the
   scenarios that name them;
 * ``pink``: Pink differential IK (optional) on the problems it can express

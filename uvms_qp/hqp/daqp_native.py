@@ -112,6 +112,8 @@ def _library() -> Any:
     lib.daqp_update_ldp.restype = C.c_int
     lib.daqp_solve.argtypes = [C.POINTER(_Result), _VP]
     lib.daqp_solve.restype = None
+    lib.daqp_set_soft_weights.argtypes = [_VP, _DP, _DP, _DP, _DP]
+    lib.daqp_set_soft_weights.restype = C.c_int
     lib.daqp_refresh_soft_weights.argtypes = [_VP]
     lib.daqp_refresh_soft_weights.restype = None
     lib.free_daqp_workspace.argtypes = [_VP]
@@ -328,6 +330,39 @@ class NativeDaqp:
             qp.sense = self._work_view.sense if self._has_solved else _ptr(s0, _IP)
             mask |= UPDATE_SENSE
         return int(self._lib.daqp_update_ldp(mask, self._work, self._qp_ref))
+
+    def soft_weights(self, rho_l: Any = None, rho_u: Any = None) -> None:
+        """Per-constraint reciprocal quadratic soft weights (``daqp.Model.soft_weights``).
+
+        One entry per constraint (simple bounds first), in the scale of the original problem;
+        0 selects ``rho_soft``. The values are copied into the workspace.
+
+        Raises:
+            ValueError: an array of the wrong length.
+            RuntimeError: a DAQP build without per-constraint soft weights.
+        """
+        m = self._qp.m
+        ptrs = []
+        for value in (rho_l, rho_u):
+            if value is None:
+                ptrs.append(None)
+                continue
+            arr = _contiguous(value, np.float64)
+            if arr.shape != (m,):
+                raise ValueError(f"soft weights: expected {m} entries, got {arr.shape}")
+            ptrs.append((arr, _ptr(arr)))
+        lo = ptrs[0][1] if ptrs[0] is not None else None
+        hi = ptrs[1][1] if ptrs[1] is not None else None
+        if not self._lib.daqp_set_soft_weights(self._work, lo, hi, None, None):
+            raise RuntimeError("daqp was built without per-constraint soft weights")
+
+    def soft_weights_in_place(self, rho: np.ndarray) -> None:
+        """:meth:`soft_weights` with the same ``rho`` on both sides, no checks (hot path).
+
+        ``rho`` must be a C-contiguous float64 array of one entry per constraint.
+        """
+        ptr = _ptr(rho)
+        self._lib.daqp_set_soft_weights(self._work, ptr, ptr, None, None)
 
     def refresh(self) -> int:
         """Hand the set-up arrays (rows and sides written in place) to DAQP; warm start kept."""

@@ -35,6 +35,7 @@ import numpy as np
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from .daqp_native import NativeDaqp, native_available
+from .daqp_weights import SoftWeights
 from .evaluate import evaluate_stacked
 from .registry import get_spec
 from .result import StackedResult, Status
@@ -136,6 +137,7 @@ class InPlaceDaqp:
         self.clipped = 0.0
         self._model: Any = None
         self._native = False
+        self._soft: Any = None
         self._hard_eq = np.zeros(ws.mh, dtype=bool)
         self._hard_key: bytes | None = None
         self._rho_soft = float(self.settings.get("rho_soft", 1e-8))
@@ -166,6 +168,7 @@ class InPlaceDaqp:
         model.settings = current
         self._model = model
         self._native = isinstance(model, NativeDaqp)
+        self._soft = SoftWeights(ws.head, ws.sizes, self.W)
         return flag
 
     def _run(self, model: Any) -> tuple[FloatArray, int, float, int]:
@@ -175,6 +178,17 @@ class InPlaceDaqp:
             return model.x, flag, model.solve_time, model.iterations
         raw, _, flag, extra = model.solve()
         return raw, flag, extra["solve_time"], extra["iterations"]
+
+    def _set_soft_weights(self, model: Any, rho_soft: float) -> None:
+        """Set per-row soft weights, so each level minimises its weighted violation.
+
+        See :mod:`uvms_qp.hqp.daqp_weights`.
+        """
+        rho = self._soft.compute(self.ws.A[self.ws.head:], self.w, rho_soft)
+        if self._native:
+            model.soft_weights_in_place(rho)
+        else:
+            model.soft_weights(rho_l=rho, rho_u=rho)
 
     def _set_rho(self, model: Any, rho: float) -> None:
         settings = model.settings
@@ -193,6 +207,7 @@ class InPlaceDaqp:
             for rho in self.rho_ladder:
                 self._set_rho(model, rho)
                 model.update(sense=self._sense0.copy())  # cold start
+                self._set_soft_weights(model, rho)
                 raw, flag, t, it = self._run(model)
                 c_time += t
                 iterations += it
@@ -230,6 +245,7 @@ class InPlaceDaqp:
             model.refresh()
         else:
             model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
+        self._set_soft_weights(model, self._rho_soft)
         raw, flag, c_time, iterations = self._run(model)
         rho = self._rho_soft
         if flag not in _SOLVED and flag not in _NO_RETRY and self.rho_ladder:

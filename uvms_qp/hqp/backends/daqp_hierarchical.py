@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ..daqp_weights import SoftWeights
 from ..evaluate import hard_feasible, hard_scale, polish_hard
 from ..inplace import new_daqp_model
 from ..problem import Problem
@@ -96,6 +97,8 @@ class DaqpHierarchicalBackend:
         self._sizes: tuple[int, ...] = ()
         self._sense = np.zeros(0, dtype=np.intc)
         self._held: tuple[object, ...] = ()
+        self._soft: Any = None
+        self._weighted: tuple[Any, Any] = (None, None)
 
     def reset(self) -> None:
         """Forget the DAQP model (the next call sets it up afresh: a cold start)."""
@@ -154,8 +157,11 @@ class DaqpHierarchicalBackend:
                 return BackendOutput(None, Status.BACKEND_ERROR,
                                      f"DAQP setup failed (exit flag {flag})", {"exitflag": flag})
             self._key = key
+            self._soft = SoftWeights(head, ws.sizes, W)
         else:
             self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
+        self._weighted = (ws, w)
+        self._set_soft_weights(self._ladder[0])
         if not self.lean:
             problem = get_problem()
             x, flag, info, rho = self._solve_with_retries(problem)
@@ -180,6 +186,12 @@ class DaqpHierarchicalBackend:
             status = Status.HARD_INFEASIBLE
             reason = "the hard box and hard rows admit no point"
         return BackendOutput(x, status, f"DAQP exit flag {flag}: {reason}", extra)
+
+    def _set_soft_weights(self, rho_soft: float) -> None:
+        """Per-row soft weights of the loaded rows (:mod:`uvms_qp.hqp.daqp_weights`)."""
+        ws, w = self._weighted
+        rho = self._soft.compute(ws.A[ws.head:], w, rho_soft)
+        self._model.soft_weights(rho_l=rho, rho_u=rho)
 
     @staticmethod
     def _extra(flag: int, info: dict[str, Any], rho: float) -> dict[str, object]:
@@ -261,6 +273,7 @@ class DaqpHierarchicalBackend:
                 settings["rho_soft"] = rho
                 self._model.settings = settings
                 self._model.update(sense=self._sense.copy())  # cold start for the retry
+                self._set_soft_weights(rho)
             if i == 0 and first is not None:
                 x, flag, info = first
             else:
