@@ -342,7 +342,8 @@ class NativeDaqp:
             RuntimeError: a DAQP build without per-constraint soft weights.
         """
         m = self._qp.m
-        ptrs = []
+        kept: list[np.ndarray] = []  # alive until the C call has copied the values
+        ptrs: list[Any] = []
         for value in (rho_l, rho_u):
             if value is None:
                 ptrs.append(None)
@@ -350,9 +351,9 @@ class NativeDaqp:
             arr = _contiguous(value, np.float64)
             if arr.shape != (m,):
                 raise ValueError(f"soft weights: expected {m} entries, got {arr.shape}")
-            ptrs.append((arr, _ptr(arr)))
-        lo = ptrs[0][1] if ptrs[0] is not None else None
-        hi = ptrs[1][1] if ptrs[1] is not None else None
+            kept.append(arr)
+            ptrs.append(_ptr(arr))
+        lo, hi = ptrs
         if not self._lib.daqp_set_soft_weights(self._work, lo, hi, None, None):
             raise RuntimeError("daqp was built without per-constraint soft weights")
 

@@ -284,8 +284,8 @@ class InPlaceDaqp:
             hv = 0.0
         self.clipped = clipped
         self.rejected = ""
-        info = {"exitflag": flag, "daqp_solve_time": c_time, "iterations": iterations,
-                "rho_soft": rho}
+        info: dict[str, object] = {"exitflag": flag, "daqp_solve_time": c_time,
+                                   "iterations": iterations, "rho_soft": rho}
         result = evaluate_stacked(ws, x, s, lo.copy(), hi.copy(), self.w, hv, self.name,
                                   Status.OPTIMAL, "", level_tol=self.level_tol,
                                   hard_tol=self.hard_tol, solve_time=perf_counter() - start,
