@@ -133,3 +133,21 @@ def test_failed_setup_keeps_a_usable_object():
     assert native.setup(H, f, A, bu, bl, sense, bp)[0] >= 0
     x, _, flag, _ = native.solve()
     assert flag in (1, 2) and np.all(np.isfinite(x))
+
+
+def test_per_row_soft_weights_match_daqp_model():
+    rng = np.random.default_rng(13)
+    problem = _hierarchy(rng, 7, (4, 3), 0.3)
+    native, model = _pair(problem)
+    m = problem[3].shape[0]
+    for _ in range(5):
+        rho = np.where(np.arange(m) < 7, 0.0, 10.0 ** rng.uniform(-9, -6, m))
+        native.soft_weights(rho_l=rho, rho_u=rho)
+        model.soft_weights(rho_l=rho, rho_u=rho)
+        x1, _, f1, _ = native.solve()
+        x2, _, f2, _ = model.solve()
+        assert f1 == f2 and np.array_equal(x1, x2)
+        native.soft_weights_in_place(rho)  # the unchecked twin sets the same values
+        assert np.array_equal(native.solve()[0], x2)
+    with pytest.raises(ValueError):
+        native.soft_weights(rho_l=np.zeros(m - 1))
