@@ -112,6 +112,8 @@ def _library() -> Any:
     lib.daqp_update_ldp.restype = C.c_int
     lib.daqp_solve.argtypes = [C.POINTER(_Result), _VP]
     lib.daqp_solve.restype = None
+    lib.daqp_allocate_soft_weights.argtypes = [_VP]
+    lib.daqp_allocate_soft_weights.restype = C.c_int
     lib.daqp_set_soft_weights.argtypes = [_VP, _DP, _DP, _DP, _DP]
     lib.daqp_set_soft_weights.restype = C.c_int
     lib.daqp_refresh_soft_weights.argtypes = [_VP]
@@ -356,6 +358,25 @@ class NativeDaqp:
         lo, hi = ptrs
         if not self._lib.daqp_set_soft_weights(self._work, lo, hi, None, None):
             raise RuntimeError("daqp was built without per-constraint soft weights")
+
+    def soft_weight_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The workspace's own per-constraint ``rho`` arrays (lower, upper sides) as numpy views.
+
+        Values written into them take effect at the next :meth:`refresh` or :meth:`update`
+        (which rebuild the factorisation with them), without a call of their own. The views
+        are valid until the next :meth:`setup`.
+
+        Raises:
+            RuntimeError: no model is set up, or a DAQP build without per-constraint weights.
+        """
+        if not self._has_model:
+            raise RuntimeError("soft_weight_arrays: set a problem up first")
+        if not self._lib.daqp_allocate_soft_weights(self._work):
+            raise RuntimeError("daqp was built without per-constraint soft weights")
+        m = self._qp.m
+        view = self._work_view
+        return (np.ctypeslib.as_array(view.rho_ls, shape=(m,)),
+                np.ctypeslib.as_array(view.rho_us, shape=(m,)))
 
     def soft_weights_in_place(self, rho: np.ndarray) -> None:
         """:meth:`soft_weights` with the same ``rho`` on both sides, no checks (hot path).

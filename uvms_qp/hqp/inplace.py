@@ -138,6 +138,7 @@ class InPlaceDaqp:
         self._model: Any = None
         self._native = False
         self._soft: Any = None
+        self._rho_arrays: tuple[np.ndarray, np.ndarray] | None = None
         self._hard_eq = np.zeros(ws.mh, dtype=bool)
         self._hard_key: bytes | None = None
         self._rho_soft = float(self.settings.get("rho_soft", 1e-8))
@@ -169,6 +170,8 @@ class InPlaceDaqp:
         self._model = model
         self._native = isinstance(model, NativeDaqp)
         self._soft = SoftWeights(ws.head, ws.sizes, self.W)
+        # native: the weights are written straight into DAQP's arrays before each update
+        self._rho_arrays = model.soft_weight_arrays() if self._native else None
         return flag
 
     def _run(self, model: Any) -> tuple[FloatArray, int, float, int]:
@@ -178,6 +181,12 @@ class InPlaceDaqp:
             return model.x, flag, model.solve_time, model.iterations
         raw, _, flag, extra = model.solve()
         return raw, flag, extra["solve_time"], extra["iterations"]
+
+    def _write_soft_weights(self, rho_soft: float) -> None:
+        """Write the per-row weights into DAQP's own arrays (taken by the next update)."""
+        lower, upper = self._rho_arrays  # type: ignore[misc]
+        self._soft.compute(self.ws.A[self.ws.head:], self.w, rho_soft, out=lower)
+        upper[:] = lower
 
     def _set_soft_weights(self, model: Any, rho_soft: float) -> None:
         """Set per-row soft weights, so each level minimises its weighted violation.
@@ -206,8 +215,8 @@ class InPlaceDaqp:
         try:
             for rho in self.rho_ladder:
                 self._set_rho(model, rho)
-                model.update(sense=self._sense0.copy())  # cold start
                 self._set_soft_weights(model, rho)
+                model.update(sense=self._sense0.copy())  # cold start
                 raw, flag, t, it = self._run(model)
                 c_time += t
                 iterations += it
@@ -241,11 +250,13 @@ class InPlaceDaqp:
                 return None
             self._hard_key = key
             model = self._model
+            self._set_soft_weights(model, self._rho_soft)
         elif self._native:
-            model.refresh()
+            self._write_soft_weights(self._rho_soft)
+            model.refresh()  # rebuilds the factorisation with the new weights
         else:
             model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
-        self._set_soft_weights(model, self._rho_soft)
+            self._set_soft_weights(model, self._rho_soft)
         raw, flag, c_time, iterations = self._run(model)
         rho = self._rho_soft
         if flag not in _SOLVED and flag not in _NO_RETRY and self.rho_ladder:
