@@ -151,3 +151,32 @@ def test_per_row_soft_weights_match_daqp_model():
         assert np.array_equal(native.solve()[0], x2)
     with pytest.raises(ValueError):
         native.soft_weights(rho_l=np.zeros(m - 1))
+
+
+def test_soft_weight_arrays_written_before_an_update_take_effect():
+    rng = np.random.default_rng(17)
+    H, f, A, bu, bl, sense, bp = _hierarchy(rng, 6, (3, 3), 0.4)
+    native = NativeDaqp()
+    native.setup(H, f, A, bu, bl, sense, bp)
+    with pytest.raises(RuntimeError):
+        NativeDaqp().soft_weight_arrays()  # nothing set up yet
+    lower, upper = native.soft_weight_arrays()
+    model = daqp.Model()
+    model.setup(H, f, A.copy(), bu.copy(), bl.copy(), sense.copy(), break_points=bp)
+    for m in (native, model):
+        settings = m.settings
+        settings["rho_soft"] = 1e-8
+        m.settings = settings
+    m_all = bu.shape[0]
+    for _ in range(4):
+        A[...] = rng.standard_normal(A.shape)
+        rho = np.where(np.arange(m_all) < 6, 0.0, 10.0 ** rng.uniform(-9, -6, m_all))
+        lower[:] = rho
+        upper[:] = rho
+        native.refresh()
+        flag = native.solve_in_place()
+        model.update(A=A, bupper=bu, blower=bl)
+        model.soft_weights(rho_l=rho, rho_u=rho)
+        x2, _, flag2, _ = model.solve()
+        assert flag == flag2
+        np.testing.assert_allclose(native.x, x2, atol=1e-12)
