@@ -116,3 +116,27 @@ def test_rho_soft_ladder_solves_a_recorded_early_stop():
     assert result.status == reference.status
     # the next tick starts from the first rho_soft again and still answers
     assert solver.solve() is not None
+
+
+def test_daqp_model_fallback_gives_the_same_answers(monkeypatch):
+    """Where the direct C calls are unavailable, daqp.Model serves: same answers, same ladder."""
+    from pathlib import Path
+
+    import daqp
+    from regressions.corpus import load_problem
+
+    problem, _ = load_problem(Path(__file__).parent / "regressions" / "demo_daqp_rho_ladder.npz")
+    sizes = [b.A.shape[0] for b in problem.levels]
+    native = InPlaceDaqp(problem.n, problem.hard.A.shape[0], sizes, problem.W)
+    _load_into(native, problem)
+    expected = native.solve()
+    monkeypatch.setattr(inplace_module, "new_daqp_model", daqp.Model)
+    fallback = InPlaceDaqp(problem.n, problem.hard.A.shape[0], sizes, problem.W)
+    _load_into(fallback, problem)
+    got = fallback.solve()
+    assert isinstance(fallback._model, daqp.Model)
+    assert got is not None and expected is not None
+    assert got.info["rho_soft"] == expected.info["rho_soft"] != 1e-8  # walked the ladder
+    np.testing.assert_allclose(got.x, expected.x, atol=1e-12)
+    # a second, warm call takes the update path of daqp.Model
+    assert fallback.solve() is not None

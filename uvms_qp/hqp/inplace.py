@@ -7,8 +7,10 @@ writes each tick's rows and sides straight into views of them, and :meth:`InPlac
 hands them to DAQP and measures the answer without copying the problem anywhere:
 
 1. DAQP's clamped sides ``max(lo, -1e30)``, ``min(hi, 1e30)`` (two array operations);
-2. one update and one solve (through :class:`~uvms_qp.hqp.daqp_native.NativeDaqp` when
-   available), warm-started from the previous tick's working set;
+2. per-row soft weights (:mod:`uvms_qp.hqp.daqp_weights`: every level minimises its weighted
+   violation, as on the other back-ends), one update and one solve (through
+   :class:`~uvms_qp.hqp.daqp_native.NativeDaqp` when available, the weights written straight
+   into DAQP's arrays), warm-started from the previous tick's working set;
 3. acceptance, from one product of the stacked rows with DAQP's ``x``: exit flag 1 or 2,
    finite ``x``, ``x`` inside the box to ``1e-7`` (then clipped into it exactly and measured
    again), hard rows at the clipped ``x`` within the solver's bare hard tolerance
@@ -211,7 +213,8 @@ class InPlaceDaqp:
         Returns the last attempt's ``(x, flag)``, the summed C time and iterations, and the
         ``rho_soft`` of the last attempt; ``rho_soft`` is restored for the next tick.
         """
-        raw, flag, rho = model.x, 0, self._rho_soft
+        raw: FloatArray = np.zeros(self.ws.n)  # the ladder is never empty here
+        flag, rho = 0, self._rho_soft
         try:
             for rho in self.rho_ladder:
                 self._set_rho(model, rho)
