@@ -9,6 +9,7 @@ cascade everywhere.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from test_hqp_lexicographic import random_mixed_inputs
 
 from uvms_qp.hqp import HierarchySolver, Rows
@@ -65,3 +66,51 @@ def test_soft_weights_formula():
     # the normalised weights rho_i / |a_i W^-1/2|^2 are never below rho_soft
     norm2 = np.sum(rows[:5] * rows[:5] / W, axis=1)
     assert np.all(rho[head:head + 5] / norm2 >= 1e-8 * (1 - 1e-12))
+
+
+class _BindingWithoutSoftWeights:
+    """``daqp.Model`` as older daqp releases offer it: no ``soft_weights``."""
+
+    def __init__(self):
+        import daqp
+
+        self._model = daqp.Model()
+
+    def setup(self, *args, **kwargs):
+        return self._model.setup(*args, **kwargs)
+
+    def update(self, **kwargs):
+        return self._model.update(**kwargs)
+
+    def solve(self):
+        return self._model.solve()
+
+    @property
+    def settings(self):
+        return self._model.settings
+
+    @settings.setter
+    def settings(self, value):
+        self._model.settings = value
+
+
+def test_a_daqp_without_soft_weights_still_solves(monkeypatch):
+    """An older daqp binding (no per-row weights): the row-normalised compromise, no error."""
+    from uvms_qp.hqp import HierarchySolver
+    from uvms_qp.hqp.inplace import InPlaceDaqp
+
+    monkeypatch.setattr("uvms_qp.hqp.backends.daqp_hierarchical.new_daqp_model",
+                        _BindingWithoutSoftWeights)
+    monkeypatch.setattr("uvms_qp.hqp.inplace.new_daqp_model", _BindingWithoutSoftWeights)
+    A = np.array([[1.0, 0.0], [10.0, 0.0]])
+    b = np.array([0.0, 10.0])
+    result = HierarchySolver("daqp").solve([[Rows.equality(A, b, weights=[1.0, 7.0])]])
+    assert result.ok
+    assert result.x[0] == pytest.approx(0.5, abs=1e-6)  # weights 1/|a_i|^2: DAQP's own
+    solver = InPlaceDaqp(2, 0, [2])
+    solver.ws.A[2:] = A
+    solver.lo[:2], solver.hi[:2] = -np.inf, np.inf
+    solver.lo[2:] = solver.hi[2:] = b
+    solver.w[:] = [1.0, 7.0]
+    got = solver.solve()
+    assert got is not None and got.x[0] == pytest.approx(0.5, abs=1e-6)

@@ -19,6 +19,7 @@ others are softened in proportion. A level whose rows are all zero keeps the def
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -66,3 +67,19 @@ class SoftWeights:
         target = self.rho if out is None else out
         np.divide(top[self._row_level], w, out=target[self.head:])
         return target
+
+
+def soft_weights_supported(model: Any) -> bool:
+    """True when a set-up ``model`` (``daqp.Model`` or ``NativeDaqp``) takes per-row weights.
+
+    The binding must offer ``soft_weights`` and the C library must have been built with them
+    (a call without arrays changes nothing and is refused otherwise). Check once per set-up.
+    """
+    setter = getattr(model, "soft_weights", None)
+    if setter is None:
+        return False
+    try:
+        setter()
+    except RuntimeError:
+        return False
+    return True

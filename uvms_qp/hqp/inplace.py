@@ -37,7 +37,7 @@ import numpy as np
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from .daqp_native import NativeDaqp, native_available
-from .daqp_weights import SoftWeights
+from .daqp_weights import SoftWeights, soft_weights_supported
 from .evaluate import evaluate_stacked
 from .registry import get_spec
 from .result import StackedResult, Status
@@ -140,6 +140,7 @@ class InPlaceDaqp:
         self._model: Any = None
         self._native = False
         self._soft: Any = None
+        self._soft_ok = False
         self._rho_arrays: tuple[np.ndarray, np.ndarray] | None = None
         self._hard_eq = np.zeros(ws.mh, dtype=bool)
         self._hard_key: bytes | None = None
@@ -172,8 +173,10 @@ class InPlaceDaqp:
         self._model = model
         self._native = isinstance(model, NativeDaqp)
         self._soft = SoftWeights(ws.head, ws.sizes, self.W)
+        self._soft_ok = soft_weights_supported(model)
         # native: the weights are written straight into DAQP's arrays before each update
-        self._rho_arrays = model.soft_weight_arrays() if self._native else None
+        self._rho_arrays = (model.soft_weight_arrays() if self._native and self._soft_ok
+                            else None)
         return flag
 
     def _run(self, model: Any) -> tuple[FloatArray, int, float, int]:
@@ -193,8 +196,11 @@ class InPlaceDaqp:
     def _set_soft_weights(self, model: Any, rho_soft: float) -> None:
         """Set per-row soft weights, so each level minimises its weighted violation.
 
-        See :mod:`uvms_qp.hqp.daqp_weights`.
+        See :mod:`uvms_qp.hqp.daqp_weights`; a daqp without them keeps its row-normalised
+        compromise (``docs/solver.md``).
         """
+        if not self._soft_ok:
+            return
         rho = self._soft.compute(self.ws.A[self.ws.head:], self.w, rho_soft)
         if self._native:
             model.soft_weights_in_place(rho)
@@ -255,7 +261,8 @@ class InPlaceDaqp:
             model = self._model
             self._set_soft_weights(model, self._rho_soft)
         elif self._native:
-            self._write_soft_weights(self._rho_soft)
+            if self._rho_arrays is not None:
+                self._write_soft_weights(self._rho_soft)
             model.refresh()  # rebuilds the factorisation with the new weights
         else:
             model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ..daqp_weights import SoftWeights
+from ..daqp_weights import SoftWeights, soft_weights_supported
 from ..evaluate import hard_feasible, hard_scale, polish_hard
 from ..inplace import new_daqp_model
 from ..problem import Problem
@@ -98,6 +98,7 @@ class DaqpHierarchicalBackend:
         self._sense = np.zeros(0, dtype=np.intc)
         self._held: tuple[object, ...] = ()
         self._soft: Any = None
+        self._soft_ok = False
         self._weighted: tuple[Any, Any] = (None, None)
 
     def reset(self) -> None:
@@ -158,6 +159,7 @@ class DaqpHierarchicalBackend:
                                      f"DAQP setup failed (exit flag {flag})", {"exitflag": flag})
             self._key = key
             self._soft = SoftWeights(head, ws.sizes, W)
+            self._soft_ok = soft_weights_supported(self._model)
         else:
             self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
         self._weighted = (ws, w)
@@ -188,7 +190,13 @@ class DaqpHierarchicalBackend:
         return BackendOutput(x, status, f"DAQP exit flag {flag}: {reason}", extra)
 
     def _set_soft_weights(self, rho_soft: float) -> None:
-        """Per-row soft weights of the loaded rows (:mod:`uvms_qp.hqp.daqp_weights`)."""
+        """Per-row soft weights of the loaded rows (:mod:`uvms_qp.hqp.daqp_weights`).
+
+        A daqp without per-constraint soft weights keeps its row-normalised compromise on
+        levels that cannot be met (see ``docs/solver.md``).
+        """
+        if not self._soft_ok:
+            return
         ws, w = self._weighted
         rho = self._soft.compute(ws.A[ws.head:], w, rho_soft)
         self._model.soft_weights(rho_l=rho, rho_u=rho)
