@@ -42,6 +42,8 @@ class SoftWeights:
     def __init__(self, head: int, sizes: Sequence[int], W: FloatArray) -> None:
         self.head = int(head)
         self.rho = np.zeros(self.head + int(sum(sizes)))
+        self._levels = self.rho[self.head:]
+        self._squares = np.zeros((int(sum(sizes)), len(W)))
         sizes = [int(m) for m in sizes]
         bounds = np.cumsum((0, *sizes))
         filled = [k for k, m in enumerate(sizes) if m]  # reduceat needs non-empty segments
@@ -49,24 +51,25 @@ class SoftWeights:
         self._row_level = np.repeat(np.arange(len(filled)), [sizes[k] for k in filled])
         self._inv_W = 1.0 / np.asarray(W, dtype=np.float64)
 
-    def compute(self, rows: FloatArray, w: FloatArray, rho_soft: float,
-                out: FloatArray | None = None) -> FloatArray:
-        """Write and return the weights for level rows ``rows`` (sum(sizes), n), weights ``w``.
+    def compute(self, rows: FloatArray, w: FloatArray, rho_soft: float) -> FloatArray:
+        """Write and return :attr:`rho` for level rows ``rows`` (sum(sizes), n), weights ``w``.
 
         Args:
             rows: The level rows ``a_i`` (original scale).
             w: Positive row weights.
             rho_soft: DAQP's uniform soft weight (in its normalised form).
-            out: Full-length array to write the level entries into (its first ``head``
-                entries are left as they are); default :attr:`rho`.
         """
-        q = (rows * rows).dot(self._inv_W)  # |a_i W^(-1/2)|^2
+        self.compute_levels(rows, w, rho_soft, self._levels)
+        return self.rho
+
+    def compute_levels(self, rows: FloatArray, w: FloatArray, rho_soft: float,
+                       out: FloatArray) -> None:
+        """:meth:`compute` for the level entries only, written into ``out`` (sum(sizes),)."""
+        q = np.square(rows, out=self._squares).dot(self._inv_W)  # |a_i W^(-1/2)|^2
         q *= w
         top = np.maximum.reduceat(q, self._starts)
         top *= rho_soft
-        target = self.rho if out is None else out
-        np.divide(top[self._row_level], w, out=target[self.head:])
-        return target
+        np.divide(top.take(self._row_level), w, out=out)
 
 
 def soft_weights_supported(model: Any) -> bool:

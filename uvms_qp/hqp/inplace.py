@@ -148,6 +148,7 @@ class InPlaceDaqp:
         self.rho_ladder = tuple(float(r) for r in rho_ladder if float(r) != self._rho_soft)
         self._sense0 = np.zeros(ws.M, dtype=np.intc)
         # persistent views (basic slicing once, not every tick)
+        self._level_rows = ws.A[ws.head:]
         self._lo_box, self._hi_box = self.lo[:n], self.hi[:n]
         self._lo_hard, self._hi_hard = self.lo[n:ws.head], self.hi[n:ws.head]
 
@@ -175,8 +176,10 @@ class InPlaceDaqp:
         self._soft = SoftWeights(ws.head, ws.sizes, self.W)
         self._soft_ok = soft_weights_supported(model)
         # native: the weights are written straight into DAQP's arrays before each update
-        self._rho_arrays = (model.soft_weight_arrays() if self._native and self._soft_ok
-                            else None)
+        self._rho_arrays = None
+        if self._native and self._soft_ok:
+            lower, upper = model.soft_weight_arrays()
+            self._rho_arrays = (lower[ws.head:], upper[ws.head:])  # the level entries
         return flag
 
     def _run(self, model: Any) -> tuple[FloatArray, int, float, int]:
@@ -190,7 +193,7 @@ class InPlaceDaqp:
     def _write_soft_weights(self, rho_soft: float) -> None:
         """Write the per-row weights into DAQP's own arrays (taken by the next update)."""
         lower, upper = self._rho_arrays  # type: ignore[misc]
-        self._soft.compute(self.ws.A[self.ws.head:], self.w, rho_soft, out=lower)
+        self._soft.compute_levels(self._level_rows, self.w, rho_soft, lower)
         upper[:] = lower
 
     def _set_soft_weights(self, model: Any, rho_soft: float) -> None:
@@ -201,7 +204,7 @@ class InPlaceDaqp:
         """
         if not self._soft_ok:
             return
-        rho = self._soft.compute(self.ws.A[self.ws.head:], self.w, rho_soft)
+        rho = self._soft.compute(self._level_rows, self.w, rho_soft)
         if self._native:
             model.soft_weights_in_place(rho)
         else:
