@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ..daqp_native import NativeDaqp
 from ..daqp_weights import SoftWeights, soft_weights_supported
 from ..evaluate import hard_feasible, hard_scale, polish_hard
 from ..inplace import new_daqp_model
@@ -99,6 +100,7 @@ class DaqpHierarchicalBackend:
         self._held: tuple[object, ...] = ()
         self._soft: Any = None
         self._soft_ok = False
+        self._rho_levels: tuple[np.ndarray, np.ndarray] | None = None
         self._weighted: tuple[Any, Any] = (None, None)
 
     def reset(self) -> None:
@@ -160,10 +162,23 @@ class DaqpHierarchicalBackend:
             self._key = key
             self._soft = SoftWeights(head, ws.sizes, W)
             self._soft_ok = soft_weights_supported(self._model)
+            self._rho_levels = None
+            if self._soft_ok and isinstance(self._model, NativeDaqp):
+                lower, upper = self._model.soft_weight_arrays()
+                self._rho_levels = (lower[head:], upper[head:])
+            self._weighted = (ws, w)
+            self._set_soft_weights(self._ladder[0])
+        elif self._rho_levels is not None:
+            # direct calls: the weights go straight into DAQP's arrays, taken by the update
+            lower, upper = self._rho_levels
+            self._soft.compute_levels(ws.A[head:], w, self._ladder[0], lower)
+            upper[:] = lower
+            self._weighted = (ws, w)
+            self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
         else:
             self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
-        self._weighted = (ws, w)
-        self._set_soft_weights(self._ladder[0])
+            self._weighted = (ws, w)
+            self._set_soft_weights(self._ladder[0])
         if not self.lean:
             problem = get_problem()
             x, flag, info, rho = self._solve_with_retries(problem)
