@@ -81,9 +81,8 @@ class DaqpHierarchicalBackend:
 
     def __init__(self, spec: SolverSpec, options: dict[str, Any] | None = None,
                  lean: bool = True) -> None:
-        import daqp
+        import daqp  # noqa: F401 - fail here, at construction, if DAQP is missing
 
-        self._daqp = daqp
         self.spec = spec
         self.lean = lean
         self.settings = {**spec.settings, **(options or {})}
