@@ -9,17 +9,20 @@ minimised lexicographically, and ``H`` regularises whatever freedom is left. We 
 * ``H = W`` (the diagonal metric), so the final regularisation is exactly ``min x' W x``: no extra
   level ``W^(1/2) x = 0`` is needed and no soft-row approximation is added at the end.
 
-Semantics that differ from the other back-ends (see ``docs/solver.md``): DAQP normalises every row
-to unit norm before softening it, so for a level that cannot be met it minimises
-``sum_i (s_i / |a_i|)^2`` (``a_i`` the row, ``s_i`` its violation); the per-row weights and row
-scalings of that level do not change the compromise. Levels that can be met, and levels whose rows
-share one value of ``w_i |a_i|^2``, give the same answer as every other back-end. The soft-row
-regularisation ``rho_soft`` (1e-8 here, with a ladder of retries) leaves errors of 1e-9..1e-7.
+Weights: DAQP normalises every row to unit norm before softening it, so with its one uniform
+soft weight a level that cannot be met would minimise ``sum_i (s_i / |a_i|)^2`` whatever the row
+weights. Every solve therefore sets DAQP's per-row soft weights
+(:mod:`uvms_qp.hqp.daqp_weights`), so each level minimises ``sum_i w_i s_i^2`` like every other
+back-end (a daqp without per-row weights keeps the normalised compromise; see
+``docs/solver.md``). The soft-row regularisation ``rho_soft`` (1e-8 here, with a ladder of
+retries) leaves errors of 1e-9..1e-7.
 
 Hot path: the rows are copied into the preallocated buffers of a
 :class:`~uvms_qp.hqp.workspace.Workspace` (reused while ``n``, the hard rows, the level sizes,
-the hard equality pattern and ``W`` repeat), the ``daqp.Model`` is updated in place (warm start
-from the previous working set), and ``x`` is measured once on the stacked rows. The first answer
+the hard equality pattern and ``W`` repeat), the DAQP model (direct C calls of
+:class:`~uvms_qp.hqp.daqp_native.NativeDaqp` where available, else ``daqp.Model``) is updated in
+place (warm start from the previous working set), and ``x`` is measured once on the stacked
+rows. The first answer
 is accepted when DAQP claims success and the box and hard rows hold to ``1e-7`` (the retry
 threshold is never below that); round-off outside the box is clipped exactly as
 :func:`~uvms_qp.hqp.evaluate.polish_hard` does. Anything else (a stall, a broken hard row, a
