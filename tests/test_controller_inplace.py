@@ -61,7 +61,7 @@ def test_rejected_in_place_answer_goes_to_the_general_path():
     fast, ref, draw = _pair(4, models)
     state = draw.model.state(draw.q)
     fast.step(state, 0.0)  # sets the in-place model up
-    model = fast._inplace._model
+    model = fast._inplace._model.model  # the DAQP model under the in-place solver
     original = model.solve_in_place
 
     def broken() -> int:
@@ -84,7 +84,7 @@ def test_in_place_box_and_hard_rows_are_verified():
     fast, _, draw = _pair(11, models)
     state = draw.model.state(draw.q)
     fast.step(state, 0.0)
-    model = fast._inplace._model
+    model = fast._inplace._model.model  # the DAQP model under the in-place solver
     original = model.solve_in_place
 
     def outside() -> int:
@@ -158,7 +158,7 @@ def test_round_off_outside_the_box_is_clipped_exactly():
             break
     else:  # pragma: no cover - the random set always has active bounds
         pytest.skip("no active upper bound")
-    model = fast._inplace._model
+    model = fast._inplace._model.model  # the DAQP model under the in-place solver
     original = model.solve_in_place
     upper = fast._upper
 

@@ -99,9 +99,7 @@ def test_a_daqp_without_soft_weights_still_solves(monkeypatch):
     from uvms_qp.hqp import HierarchySolver
     from uvms_qp.hqp.inplace import InPlaceDaqp
 
-    monkeypatch.setattr("uvms_qp.hqp.backends.daqp_hierarchical.new_daqp_model",
-                        _BindingWithoutSoftWeights)
-    monkeypatch.setattr("uvms_qp.hqp.inplace.new_daqp_model", _BindingWithoutSoftWeights)
+    monkeypatch.setattr("uvms_qp.hqp.daqp_model.new_daqp_model", _BindingWithoutSoftWeights)
     A = np.array([[1.0, 0.0], [10.0, 0.0]])
     b = np.array([0.0, 10.0])
     result = HierarchySolver("daqp").solve([[Rows.equality(A, b, weights=[1.0, 7.0])]])

@@ -109,7 +109,8 @@ def test_rho_soft_ladder_solves_a_recorded_early_stop():
     result = solver.solve()
     assert result is not None and result.ok
     assert result.info["rho_soft"] != 1e-8
-    assert solver.settings["rho_soft"] == solver._model.settings["rho_soft"] == 1e-8  # restored
+    restored = solver._model.model.settings["rho_soft"]
+    assert solver.settings["rho_soft"] == restored == 1e-8
     reference = HierarchySolver("daqp", weights=problem.W).solve_problem(problem)
     assert reference.info["rho_soft"] == result.info["rho_soft"]
     np.testing.assert_allclose(result.x, reference.x, atol=1e-9)
@@ -130,11 +131,11 @@ def test_daqp_model_fallback_gives_the_same_answers(monkeypatch):
     native = InPlaceDaqp(problem.n, problem.hard.A.shape[0], sizes, problem.W)
     _load_into(native, problem)
     expected = native.solve()
-    monkeypatch.setattr(inplace_module, "new_daqp_model", daqp.Model)
+    monkeypatch.setattr("uvms_qp.hqp.daqp_model.new_daqp_model", daqp.Model)
     fallback = InPlaceDaqp(problem.n, problem.hard.A.shape[0], sizes, problem.W)
     _load_into(fallback, problem)
     got = fallback.solve()
-    assert isinstance(fallback._model, daqp.Model)
+    assert isinstance(fallback._model.model, daqp.Model)
     assert got is not None and expected is not None
     assert got.info["rho_soft"] == expected.info["rho_soft"] != 1e-8  # walked the ladder
     np.testing.assert_allclose(got.x, expected.x, atol=1e-12)

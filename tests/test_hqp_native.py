@@ -10,8 +10,8 @@ import daqp
 import numpy as np
 import pytest
 
+from uvms_qp.hqp.daqp_model import new_daqp_model
 from uvms_qp.hqp.daqp_native import SUPPORTED_VERSIONS, NativeDaqp, native_available
-from uvms_qp.hqp.inplace import new_daqp_model
 
 pytestmark = pytest.mark.skipif(not native_available(),
                                 reason=f"daqp version not in {SUPPORTED_VERSIONS}")

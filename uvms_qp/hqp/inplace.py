@@ -36,8 +36,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from .daqp_native import NativeDaqp, native_available
-from .daqp_weights import SoftWeights, soft_weights_supported
+from .daqp_model import HierarchyModel
 from .evaluate import evaluate_stacked
 from .registry import get_spec
 from .result import StackedResult, Status
@@ -53,15 +52,6 @@ def _count(value: Any, name: str, least: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least:
         raise InputError(f"{name}: expected an integer >= {least}, got {value!r}")
     return int(value)
-
-
-def new_daqp_model() -> Any:
-    """A DAQP model: :class:`NativeDaqp` when it is available, else ``daqp.Model``."""
-    if native_available():
-        return NativeDaqp()
-    import daqp
-
-    return daqp.Model()
 
 
 class InPlaceDaqp:
@@ -137,18 +127,12 @@ class InPlaceDaqp:
         self.name = name
         self.rejected = ""
         self.clipped = 0.0
-        self._model: Any = None
-        self._native = False
-        self._soft: Any = None
-        self._soft_ok = False
-        self._rho_arrays: tuple[np.ndarray, np.ndarray] | None = None
+        self._model: HierarchyModel | None = None
         self._hard_eq = np.zeros(ws.mh, dtype=bool)
         self._hard_key: bytes | None = None
         self._rho_soft = float(self.settings.get("rho_soft", 1e-8))
         self.rho_ladder = tuple(float(r) for r in rho_ladder if float(r) != self._rho_soft)
-        self._sense0 = np.zeros(ws.M, dtype=np.intc)
         # persistent views (basic slicing once, not every tick)
-        self._level_rows = ws.A[ws.head:]
         self._lo_box, self._hi_box = self.lo[:n], self.hi[:n]
         self._lo_hard, self._hi_hard = self.lo[n:ws.head], self.hi[n:ws.head]
 
@@ -156,66 +140,7 @@ class InPlaceDaqp:
         """Forget the DAQP model: the next solve sets it up afresh (a cold start)."""
         self._hard_key = None
 
-    def _setup(self, hard_eq: np.ndarray) -> int:
-        ws = self.ws
-        sense = np.zeros(ws.M, dtype=np.intc)
-        sense[ws.n: ws.head][hard_eq] = 5  # hard equality rows: active and immutable
-        self._sense0 = sense.copy()  # the cold-start working set of the retries
-        bp = np.unique(np.cumsum((ws.head, *ws.sizes))).astype(np.intc)
-        model = new_daqp_model()
-        flag = int(model.setup(np.diag(self.W), np.zeros(ws.n), ws.daqp_A, ws.bu, ws.bl, sense,
-                               break_points=bp)[0])
-        if flag < 0:
-            self._model = None
-            return flag
-        current = model.settings
-        current.update(self.settings)
-        model.settings = current
-        self._model = model
-        self._native = isinstance(model, NativeDaqp)
-        self._soft = SoftWeights(ws.head, ws.sizes, self.W)
-        self._soft_ok = soft_weights_supported(model)
-        # native: the weights are written straight into DAQP's arrays before each update
-        self._rho_arrays = None
-        if self._native and self._soft_ok:
-            lower, upper = model.soft_weight_arrays()
-            self._rho_arrays = (lower[ws.head:], upper[ws.head:])  # the level entries
-        return flag
-
-    def _run(self, model: Any) -> tuple[FloatArray, int, float, int]:
-        """One DAQP solve: ``(x, exit flag, C solve time [s], iterations)``."""
-        if self._native:
-            flag = model.solve_in_place()
-            return model.x, flag, model.solve_time, model.iterations
-        raw, _, flag, extra = model.solve()
-        return raw, flag, extra["solve_time"], extra["iterations"]
-
-    def _write_soft_weights(self, rho_soft: float) -> None:
-        """Write the per-row weights into DAQP's own arrays (taken by the next update)."""
-        lower, upper = self._rho_arrays  # type: ignore[misc]
-        self._soft.compute_levels(self._level_rows, self.w, rho_soft, lower)
-        upper[:] = lower
-
-    def _set_soft_weights(self, model: Any, rho_soft: float) -> None:
-        """Set per-row soft weights, so each level minimises its weighted violation.
-
-        See :mod:`uvms_qp.hqp.daqp_weights`; a daqp without them keeps its row-normalised
-        compromise (``docs/solver.md``).
-        """
-        if not self._soft_ok:
-            return
-        rho = self._soft.compute(self._level_rows, self.w, rho_soft)
-        if self._native:
-            model.soft_weights_in_place(rho)
-        else:
-            model.soft_weights(rho_l=rho, rho_u=rho)
-
-    def _set_rho(self, model: Any, rho: float) -> None:
-        settings = model.settings
-        settings["rho_soft"] = rho
-        model.settings = settings
-
-    def _retry(self, model: Any, c_time: float,
+    def _retry(self, model: HierarchyModel, c_time: float,
                iterations: int) -> tuple[FloatArray, int, float, int, float]:
         """Walk :attr:`rho_ladder` from cold starts (as the back-end's general path does).
 
@@ -226,16 +151,14 @@ class InPlaceDaqp:
         flag, rho = 0, self._rho_soft
         try:
             for rho in self.rho_ladder:
-                self._set_rho(model, rho)
-                self._set_soft_weights(model, rho)
-                model.update(sense=self._sense0.copy())  # cold start
-                raw, flag, t, it = self._run(model)
+                model.cold(self.w, rho)
+                raw, flag, t, it = model.solve()
                 c_time += t
                 iterations += it
                 if flag in _SOLVED or flag in _NO_RETRY:
                     break
         finally:
-            self._set_rho(model, self._rho_soft)
+            model.restore()
         return raw, flag, c_time, iterations, rho
 
     def solve(self) -> StackedResult | None:
@@ -255,22 +178,16 @@ class InPlaceDaqp:
         np.minimum(hi, DAQP_INF, out=ws.bu)
         model = self._model
         if key != self._hard_key or model is None:
-            flag = self._setup(self._hard_eq)
-            if flag < 0:
-                self._hard_key = None
-                self.rejected = f"DAQP setup failed (exit flag {flag})"
+            model = HierarchyModel(ws, self.W, self._hard_eq, self.settings)
+            if model.flag < 0:
+                self._model, self._hard_key = None, None
+                self.rejected = f"DAQP setup failed (exit flag {model.flag})"
                 return None
-            self._hard_key = key
-            model = self._model
-            self._set_soft_weights(model, self._rho_soft)
-        elif self._native:
-            if self._rho_arrays is not None:
-                self._write_soft_weights(self._rho_soft)
-            model.refresh()  # rebuilds the factorisation with the new weights
+            self._model, self._hard_key = model, key
+            model.load(self.w, first=True)
         else:
-            model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
-            self._set_soft_weights(model, self._rho_soft)
-        raw, flag, c_time, iterations = self._run(model)
+            model.load(self.w)
+        raw, flag, c_time, iterations = model.solve()
         rho = self._rho_soft
         if flag not in _SOLVED and flag not in _NO_RETRY and self.rho_ladder:
             raw, flag, c_time, iterations, rho = self._retry(model, c_time, iterations)

@@ -34,14 +34,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
-from ..daqp_native import NativeDaqp
-from ..daqp_weights import SoftWeights, soft_weights_supported
+from ..daqp_model import HierarchyModel
 from ..evaluate import hard_feasible, hard_scale, polish_hard
-from ..inplace import new_daqp_model
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
@@ -93,17 +91,12 @@ class DaqpHierarchicalBackend:
         first = float(self.settings.get("rho_soft", 1e-8))
         self._ladder = (first, [first] + [float(r) for r in self.settings.get("rho_ladder", ())
                                           if r != first])
-        self._model: Any = None
+        self._model: HierarchyModel | None = None
         self._key: tuple[object, ...] | None = None
         self._ws: Workspace | None = None
         self._levels_ref: object = None
         self._sizes: tuple[int, ...] = ()
-        self._sense = np.zeros(0, dtype=np.intc)
-        self._held: tuple[object, ...] = ()
-        self._soft: Any = None
-        self._soft_ok = False
-        self._rho_levels: tuple[np.ndarray, np.ndarray] | None = None
-        self._weighted: tuple[Any, Any] = (None, None)
+        self._w: np.ndarray = np.zeros(0)  # level row weights of the loaded problem
 
     def reset(self) -> None:
         """Forget the DAQP model (the next call sets it up afresh: a cold start)."""
@@ -155,37 +148,28 @@ class DaqpHierarchicalBackend:
         n, head = ws.n, ws.head
         hard_eq = (lo[n:head] == hi[n:head]).tobytes() if ws.mh else b""
         key = (ws.key, hard_eq, W.tobytes())
+        self._w = w
         if key != self._key:
-            flag = self._setup(ws, W, lo[n:head] == hi[n:head])
-            if flag < 0:
-                self._key = None
+            model = HierarchyModel(ws, W, lo[n:head] == hi[n:head], self._daqp_settings)
+            if model.flag < 0:
+                self._model, self._key = None, None
                 return BackendOutput(None, Status.BACKEND_ERROR,
-                                     f"DAQP setup failed (exit flag {flag})", {"exitflag": flag})
-            self._key = key
-            self._soft = SoftWeights(head, ws.sizes, W)
-            self._soft_ok = soft_weights_supported(self._model)
-            self._rho_levels = None
-            if self._soft_ok and isinstance(self._model, NativeDaqp):
-                lower, upper = self._model.soft_weight_arrays()
-                self._rho_levels = (lower[head:], upper[head:])
-            self._weighted = (ws, w)
-            self._set_soft_weights(self._ladder[0])
-        elif self._rho_levels is not None:
-            # direct calls: the weights go straight into DAQP's arrays, taken by the update
-            lower, upper = self._rho_levels
-            self._soft.compute_levels(ws.A[head:], w, self._ladder[0], lower)
-            upper[:] = lower
-            self._weighted = (ws, w)
-            self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
+                                     f"DAQP setup failed (exit flag {model.flag})",
+                                     {"exitflag": model.flag})
+            self._model, self._key = model, key
+            model.load(w, first=True)
+            setup_time = model.setup_time
         else:
-            self._model.update(A=ws.daqp_A, bupper=ws.bu, blower=ws.bl)
-            self._weighted = (ws, w)
-            self._set_soft_weights(self._ladder[0])
+            model = cast(HierarchyModel, self._model)  # kept with the key
+            model.load(w)
+            setup_time = 0.0
         if not self.lean:
             problem = get_problem()
             x, flag, info, rho = self._solve_with_retries(problem)
         else:
-            x, _, flag, info = self._model.solve()
+            raw, flag, c_time, iterations = model.solve()
+            x = raw.copy()  # the result keeps x; the model's buffer is reused
+            info = {"solve_time": c_time, "setup_time": setup_time, "iterations": iterations}
             if flag in (1, 2):
                 fast = self._measure(ws, x, lo, hi, get_problem)
                 if fast is not None:
@@ -206,40 +190,11 @@ class DaqpHierarchicalBackend:
             reason = "the hard box and hard rows admit no point"
         return BackendOutput(x, status, f"DAQP exit flag {flag}: {reason}", extra)
 
-    def _set_soft_weights(self, rho_soft: float) -> None:
-        """Per-row soft weights of the loaded rows (:mod:`uvms_qp.hqp.daqp_weights`).
-
-        A daqp without per-constraint soft weights keeps its row-normalised compromise on
-        levels that cannot be met (see ``docs/solver.md``).
-        """
-        if not self._soft_ok:
-            return
-        ws, w = self._weighted
-        rho = self._soft.compute(ws.A[ws.head:], w, rho_soft)
-        self._model.soft_weights(rho_l=rho, rho_u=rho)
-
     @staticmethod
     def _extra(flag: int, info: dict[str, Any], rho: float) -> dict[str, object]:
         return {"exitflag": int(flag), "daqp_solve_time": info["solve_time"],
                 "daqp_setup_time": info["setup_time"], "iterations": info["iterations"],
                 "rho_soft": rho}
-
-    def _setup(self, ws: Workspace, W: np.ndarray, hard_eq: np.ndarray) -> int:
-        """Set a new ``daqp.Model`` up for the structure of ``ws`` (H = diag(W), f = 0)."""
-        n = ws.n
-        sense = np.zeros(ws.M, dtype=np.intc)  # simple bounds, hard rows, level rows
-        sense[n: ws.head][hard_eq] = 5
-        bp = np.unique(np.cumsum((ws.head, *ws.sizes))).astype(np.intc)
-        self._sense = sense
-        H, f = np.diag(W), np.zeros(n)
-        self._held = (H, f, bp, ws)  # arrays handed to DAQP stay alive with the model
-        self._model = new_daqp_model()
-        flag = int(self._model.setup(H, f, ws.daqp_A, ws.bu, ws.bl, sense, break_points=bp)[0])
-        if flag >= 0:
-            settings = self._model.settings
-            settings.update(self._daqp_settings)
-            self._model.settings = settings
-        return flag
 
     @staticmethod
     def _measure(ws: Workspace, x: np.ndarray, lo: np.ndarray, hi: np.ndarray,
@@ -291,18 +246,17 @@ class DaqpHierarchicalBackend:
         ``first`` is the answer of a solve already made with the first ``rho_soft``.
         """
         first_rho, ladder = self._ladder
+        model = cast(HierarchyModel, self._model)  # set up by solve_loaded
         tol = max(self.spec.hard_tol * hard_scale(problem), 1e-7)
         for i, rho in enumerate(ladder):
             if i:
-                settings = self._model.settings
-                settings["rho_soft"] = rho
-                self._model.settings = settings
-                self._model.update(sense=self._sense.copy())  # cold start for the retry
-                self._set_soft_weights(rho)
+                model.cold(self._w, rho)
             if i == 0 and first is not None:
                 x, flag, info = first
             else:
-                x, _, flag, info = self._model.solve()
+                raw, flag, c_time, iterations = model.solve()
+                x = raw.copy()
+                info = {"solve_time": c_time, "setup_time": 0.0, "iterations": iterations}
             if flag == -1:
                 break
             if flag in (1, 2) and _box_rows_violation(problem, x) <= tol:
@@ -310,9 +264,7 @@ class DaqpHierarchicalBackend:
             if flag in (1, 2):
                 flag = 3  # claimed success but a hard row is broken: not acceptable
         if len(ladder) > 1 and rho != first_rho:
-            settings = self._model.settings
-            settings["rho_soft"] = first_rho
-            self._model.settings = settings
+            model.restore()
         return x, int(flag), info, rho
 
 
