@@ -17,7 +17,6 @@ states never read each other's numbers.
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -25,7 +24,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..errors import UnknownNameError
-from .vehicle import quaternion_to_rotation, rotation_to_rpy
+from .vehicle import fossen_jacobian_values, spatial_eta_and_rotation
 
 if TYPE_CHECKING:
     from .model import Model
@@ -115,9 +114,7 @@ class State:
         if eta is None:
             m = self.model
             if m.vehicle_kind == "spatial":  # Vehicle.eta_values, keeping the rotation
-                x, y, z, qx, qy, qz, qw = self.q[:7].tolist()
-                R = self._vehicle_rotation = quaternion_to_rotation(qx, qy, qz, qw)
-                eta = [x, y, z, *rotation_to_rpy(R)]
+                eta, self._vehicle_rotation = spatial_eta_and_rotation(self.q[:7])
             else:
                 eta = m.vehicle.eta_values(self.q[: m.nq_vehicle])
             self._eta_list = eta
@@ -334,16 +331,7 @@ class State:
             if self.model.vehicle_kind == "spatial":
                 # Fossen's J with the rotation of the configuration's quaternion (kept by
                 # eta_floats; the matrix R(eta) up to rounding) instead of one rebuilt from eta
-                r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._vehicle_rotation
-                phi, theta = eta[3], eta[4]
-                sphi, cphi = math.sin(phi), math.cos(phi)
-                ctheta, ttheta = math.cos(theta), math.tan(theta)
-                values = (r00, r01, r02, 0.0, 0.0, 0.0,
-                          r10, r11, r12, 0.0, 0.0, 0.0,
-                          r20, r21, r22, 0.0, 0.0, 0.0,
-                          0.0, 0.0, 0.0, 1.0, sphi * ttheta, cphi * ttheta,
-                          0.0, 0.0, 0.0, 0.0, cphi, -sphi,
-                          0.0, 0.0, 0.0, 0.0, sphi / ctheta, cphi / ctheta)
+                values = fossen_jacobian_values(self._vehicle_rotation, eta[3], eta[4])
             else:
                 values = self.model.vehicle.pose_jacobian_values(eta)
             self._eta_jacobian_values = values

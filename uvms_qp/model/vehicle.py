@@ -108,6 +108,35 @@ def rpy_to_rotation(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
     return quaternion_to_rotation(x, y, z, w)
 
 
+def spatial_eta_and_rotation(qv: Any) -> tuple[list[float], tuple[float, ...]]:
+    """``eta`` [m, rad] and the rotation of a free-flyer configuration.
+
+    ``qv = [x, y, z, qx, qy, qz, qw]``; the rotation is 9 row-major floats, and both follow
+    Pinocchio's operations (:func:`quaternion_to_rotation`, :func:`rotation_to_rpy`).
+    """
+    x, y, z, qx, qy, qz, qw = qv.tolist() if isinstance(qv, np.ndarray) else qv
+    R = quaternion_to_rotation(qx, qy, qz, qw)
+    return [x, y, z, *rotation_to_rpy(R)], R
+
+
+def fossen_jacobian_values(R: Sequence[float], phi: float, theta: float) -> tuple[float, ...]:
+    """Fossen's ``J = blkdiag(R, T(phi, theta))`` (6 x 6), row-major floats.
+
+    ``003_229789978cc4b235.txt``, Eq. (2)-(3): ``R`` the body-to-world rotation (9 row-major
+    floats), ``T = [[1, s(phi) t(theta), c(phi) t(theta)], [0, c(phi), -s(phi)],
+    [0, s(phi)/c(theta), c(phi)/c(theta)]]`` [rad].
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
+    sphi, cphi = math.sin(phi), math.cos(phi)
+    ctheta, ttheta = math.cos(theta), math.tan(theta)
+    return (r00, r01, r02, 0.0, 0.0, 0.0,
+            r10, r11, r12, 0.0, 0.0, 0.0,
+            r20, r21, r22, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 1.0, sphi * ttheta, cphi * ttheta,
+            0.0, 0.0, 0.0, 0.0, cphi, -sphi,
+            0.0, 0.0, 0.0, 0.0, sphi / ctheta, cphi / ctheta)
+
+
 @dataclass(frozen=True)
 class Vehicle:
     """A vehicle kind with its actuated DOFs and optional rate limits.
@@ -215,8 +244,7 @@ class Vehicle:
         :func:`rotation_to_rpy`).
         """
         if self.kind == "spatial":
-            x, y, z, qx, qy, qz, qw = qv.tolist() if isinstance(qv, np.ndarray) else qv
-            return [x, y, z, *rotation_to_rpy(quaternion_to_rotation(qx, qy, qz, qw))]
+            return spatial_eta_and_rotation(qv)[0]
         if self.kind == "planar":
             x, y, c, s = qv.tolist() if isinstance(qv, np.ndarray) else qv
             return [x, y, math.atan2(s, c)]
@@ -249,15 +277,7 @@ class Vehicle:
             angles = eta[3:6]
             phi, theta, psi = (angles.tolist() if isinstance(angles, np.ndarray)
                                else (float(a) for a in angles))
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = rpy_to_rotation(phi, theta, psi)
-            sphi, cphi = math.sin(phi), math.cos(phi)
-            ctheta, ttheta = math.cos(theta), math.tan(theta)
-            return (r00, r01, r02, 0.0, 0.0, 0.0,
-                    r10, r11, r12, 0.0, 0.0, 0.0,
-                    r20, r21, r22, 0.0, 0.0, 0.0,
-                    0.0, 0.0, 0.0, 1.0, sphi * ttheta, cphi * ttheta,
-                    0.0, 0.0, 0.0, 0.0, cphi, -sphi,
-                    0.0, 0.0, 0.0, 0.0, sphi / ctheta, cphi / ctheta)
+            return fossen_jacobian_values(rpy_to_rotation(phi, theta, psi), phi, theta)
         if self.kind == "planar":
             c, s = math.cos(eta[2]), math.sin(eta[2])
             return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
