@@ -57,12 +57,29 @@ def joint_limit_index(q: FloatArray, lower: FloatArray, upper: FloatArray,
     Returns:
         ``(H, grad H)``.
     """
+    H, grad = _index_floats(np.asarray(q, dtype=np.float64).tolist(),
+                            _per_joint(lower, upper, strength, clearance))
+    return H, np.array(grad)
+
+
+def _per_joint(lower: FloatArray, upper: FloatArray, strength: FloatArray,
+               clearance: float) -> list[tuple[float, float, float, float, float]]:
+    """Per joint ``(q_min, q_max, C, span, eps)`` as plain floats for :func:`_index_floats`."""
     span = upper - lower
-    tiny = clearance * span
-    a = np.maximum(upper - q, tiny)
-    b = np.maximum(q - lower, tiny)
-    H = float(np.sum(span * span / (strength * a * b)))
-    grad = span * span * (2.0 * q - upper - lower) / (strength * a * a * b * b)
+    return list(zip(lower.tolist(), upper.tolist(), strength.tolist(), span.tolist(),
+                    (clearance * span).tolist(), strict=True))
+
+
+def _index_floats(q: list[float], per_joint: list[tuple[float, float, float, float, float]]
+                  ) -> tuple[float, list[float]]:
+    """:func:`joint_limit_index` in plain floats, joint by joint (a handful of joints)."""
+    H = 0.0
+    grad = []
+    for x, (lo, hi, C, span, tiny) in zip(q, per_joint, strict=True):
+        a = max(hi - x, tiny)
+        b = max(x - lo, tiny)
+        H += span * span / (C * a * b)
+        grad.append(span * span * (2.0 * x - hi - lo) / (C * a * a * b * b))
     return H, grad
 
 
@@ -187,9 +204,7 @@ class JointLimitTask(Task):
         kept = idx.tolist()
         self._subset = None if kept == list(range(model.n_joints)) else kept
         self.error_unit = "rad" if self.mode == "margin" else "1"  # distance or index H
-        span = hi - lo
-        self._per_joint = list(zip(lo.tolist(), hi.tolist(), C.tolist(), span.tolist(),
-                                   (LIMIT_CLEARANCE * span).tolist(), strict=True))
+        self._per_joint = _per_joint(lo, hi, C, LIMIT_CLEARANCE)
         self._set_band()
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
@@ -215,8 +230,8 @@ class JointLimitTask(Task):
              upper: FloatArray) -> None:
         """Write the gradient rows or the margin band (see the class docstring).
 
-        Per joint in plain floats (a handful of joints; lists sized at bind): the band, and
-        the operations of :func:`joint_limit_index` in the same order.
+        Per joint in plain floats (a handful of joints; lists sized at bind): the band, or
+        the index and its gradient (:func:`joint_limit_index`'s own routine).
         """
         q = state.joint_floats()  # shared with the other consumers of this state
         if self._subset is not None:
@@ -229,13 +244,7 @@ class JointLimitTask(Task):
             self._last_error = np.array((min(min(map(sub, q, self._lo_list)),
                                              min(map(sub, self._hi_list, q))),))
             return
-        H = 0.0
-        g = []
-        for x, (lo, hi, C, span, tiny) in zip(q, self._per_joint, strict=True):
-            a = max(hi - x, tiny)
-            b = max(x - lo, tiny)
-            H += span * span / (C * a * b)
-            g.append(span * span * (2.0 * x - hi - lo) / (C * a * a * b * b))
+        H, g = _index_floats(q, self._per_joint)
         self.value = H
         self._last_error = np.array((H,))
         if self.mode == "damping":
