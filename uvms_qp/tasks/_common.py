@@ -164,6 +164,19 @@ ANGLE_AXES = frozenset({"phi", "theta", "psi"})
 _TWO_PI = 2.0 * math.pi
 
 
+def pose_units(axes: Sequence[str]) -> tuple[str, str]:
+    """``(error unit, rate unit)`` of rows over the pose axes ``axes``.
+
+    Positions (``x, y, z``) in m and m/s, angles (any other axis: ``rx``..., ``phi``...) in
+    rad and rad/s; ``("m, rad", "m/s, rad/s")`` for a mix.
+    """
+    linear = any(a in _POSITION_AXES for a in axes)
+    angular = any(a not in _POSITION_AXES for a in axes)
+    error = ", ".join(u for u, on in (("m", linear), ("rad", angular)) if on)
+    rate = ", ".join(u for u, on in (("m/s", linear), ("rad/s", angular)) if on)
+    return error, rate
+
+
 _LINEAR_RATES = frozenset({"u", "v", "w"})
 _POSITION_AXES = frozenset({"x", "y", "z"})
 

@@ -17,6 +17,7 @@ from ._common import (
     check_planar_point,
     compact_index,
     parse_axes,
+    pose_units,
 )
 from .task import ErrorTask
 
@@ -209,10 +210,7 @@ class EndEffectorTask(ErrorTask):
         self._all_position = self.mode == "position" and len(axes) == 3
         self._sel_list = sel.tolist()
         self._all_axes = self._sel_list == [TWIST_AXES.index(a) for a in _MODE_AXES[self.mode]]
-        linear = any(a in ("x", "y", "z") for a in axes)
-        angular = any(a in ("rx", "ry", "rz") for a in axes)
-        self.error_unit = ", ".join(u for u, on in (("m", linear), ("rad", angular)) if on)
-        self.rate_unit = ", ".join(u for u, on in (("m/s", linear), ("rad/s", angular)) if on)
+        self.error_unit, self.rate_unit = pose_units(axes)
         self._work = np.zeros((6, model.nv))  # [J_p; Jlog J_omega] of the orientation modes
         return len(axes)
 

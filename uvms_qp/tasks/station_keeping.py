@@ -16,6 +16,7 @@ from ._common import (
     compact_index,
     eta_axes,
     parse_axes,
+    pose_units,
     vehicle_pose_jacobian,
     wrap_angles_in_place,
 )
@@ -112,10 +113,7 @@ class StationKeepingTask(ErrorTask):
         self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
         self._rows = EtaRows(model, self._eta_pos)
         self._hold(self._target_arg)
-        linear = any(a in ("x", "y", "z") for a in axes)
-        angular = any(a in ANGLE_AXES for a in axes)
-        self.error_unit = ", ".join(u for u, on in (("m", linear), ("rad", angular)) if on)
-        self.rate_unit = ", ".join(u for u, on in (("m/s", linear), ("rad/s", angular)) if on)
+        self.error_unit, self.rate_unit = pose_units(axes)
         return len(axes)
 
     def _hold(self, value: FloatArray | None) -> None:
