@@ -63,6 +63,20 @@ NULLSPACE_RCOND = 1e-10
 NULLSPACE_ATOL = 0.0
 
 
+def not_a_state(value: Any) -> InputError:
+    """The error for a ``step`` called with something other than a model :class:`State`.
+
+    A configuration array is the usual mistake: the message says how to make the state.
+    """
+    kind = type(value).__module__ + "." + type(value).__qualname__
+    if kind.startswith("builtins."):
+        kind = type(value).__qualname__
+    return InputError(
+        f"state: step expects a State, got {kind}; build one from a configuration q with "
+        "model.state(q)"
+    )
+
+
 @dataclass(eq=False)
 class StepResult:
     """Outcome of one control tick; never None, ``zeta`` always finite.
@@ -547,7 +561,8 @@ class Controller:
         stage that produced zeta.
 
         Raises:
-            InputError: a task whose target was never set, a state of another model.
+            InputError: a task whose target was never set, a state of another model, or
+                something other than a State (e.g. a configuration array; use ``model.state(q)``).
             NonFiniteError: a task produced NaN/inf rows (the message names the task); bad input
                 never reaches a back-end.
             BoundsError: the hard box is empty (the message names the constraints involved): no
@@ -555,7 +570,11 @@ class Controller:
             NoSolutionFound: strict mode, and no back-end returned a verified solution.
         """
         start = time.perf_counter()
-        if state.model is not self.model:
+        try:
+            model = state.model
+        except AttributeError:  # costs nothing on the happy path
+            raise not_a_state(state) from None
+        if model is not self.model:
             raise InputError("state: belongs to another model than the controller's")
         self._fill(state, t)
         self._fill_box(state)

@@ -165,13 +165,25 @@ def get_spec(name: str) -> SolverSpec:
     """
     spec = _BY_NAME.get(name) if isinstance(name, str) else None
     if spec is None:
-        hint = "known solvers: " + ", ".join(_BY_NAME)
-        if isinstance(name, str) and name.startswith("cascade:"):
-            hint = ("cascades exist for the qpsolvers back-ends "
-                    + ", ".join(s.qp_name for s in SOLVERS if s.kind == "cascade"))
-        raise UnknownSolverError(name, available_solvers(), hint)
+        raise UnknownSolverError(name, available_solvers(), _unknown_hint(name))
     if not spec.available:
         raise UnknownSolverError(
             name, available_solvers(), f"{name} is not installed; install it with "
             f"`pip install {spec.pip}`")
     return spec
+
+
+def _unknown_hint(name: object) -> str:
+    """What to add to the list of installed solvers when ``name`` is not a solver at all.
+
+    The installed solvers are listed by the error itself; the hint only adds what that list
+    does not say: the intended cascade for a bare qpsolvers name, the back-ends a cascade can
+    use, and the known solvers whose back-end is not installed.
+    """
+    cascades = {s.qp_name: s for s in SOLVERS if s.kind == "cascade"}
+    if isinstance(name, str) and name in cascades:
+        return f"did you mean 'cascade:{name}'?"
+    if isinstance(name, str) and name.startswith("cascade:"):
+        return "cascades exist for the qpsolvers back-ends " + ", ".join(cascades)
+    missing = [s.name for s in SOLVERS if not s.available]
+    return "also known but not installed: " + ", ".join(missing) if missing else ""

@@ -402,7 +402,7 @@ class Model:
 
         Args:
             eta: Vehicle pose: ``[x, y, z, phi, theta, psi]`` (spatial), ``[x, y, psi]``
-                (planar) or empty (fixed) [m, rad], world NED, Z-Y-X Euler angles.
+                (planar) or empty or None (fixed) [m, rad], world NED, Z-Y-X Euler angles.
             joints: Joint angles [rad] (length :attr:`n_joints`).
 
         Returns:
@@ -411,9 +411,16 @@ class Model:
         Raises:
             ShapeError, NonFiniteError: wrong lengths or non-finite values.
         """
-        eta_v = as_vector(eta, "eta", self.eta_size) if self.eta_size else np.zeros(0)
-        if not self.eta_size and np.size(eta) != 0:
-            raise ShapeError(f"eta: expected an empty pose for a fixed base, got {np.size(eta)}")
+        if not self.eta_size:
+            if eta is not None and np.size(eta) != 0:
+                raise ShapeError("eta: expected an empty pose (or None) for a fixed base, got "
+                                 f"length {np.size(eta)}")
+            eta_v = np.zeros(0)
+        elif eta is None:
+            raise ShapeError(f"eta: expected a {self.vehicle_kind} pose of length "
+                             f"{self.eta_size}, got None")
+        else:
+            eta_v = as_vector(eta, "eta", self.eta_size)
         qj = self._check_joints(joints, "joints")
         return np.concatenate((self.vehicle.q_from_eta(eta_v), qj))
 

@@ -128,7 +128,9 @@ def build_scheme(name: str, scenario: Any, path: str = "schemes") -> Scheme:
     except ConfigError:
         raise
     except (UvmsQpError, ValueError) as exc:
-        raise ConfigError(f"scheme {name!r}: {exc}", path) from exc
+        # the scheme's own messages start with its name: say it once
+        message = str(exc).removeprefix(f"{name}: ").removeprefix(f"{name}.")
+        raise ConfigError(f"scheme {name!r}: {message}", path) from exc
     return scheme
 
 

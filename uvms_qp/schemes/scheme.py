@@ -81,9 +81,11 @@ class Scheme(ABC):
         """
         kind = getattr(model, "vehicle_kind", None)
         if kind not in self.vehicle_kinds:
+            kinds = " or ".join(repr(k) for k in self.vehicle_kinds)
+            of_type = "" if self.name == self.type_name else f" (scheme type {self.type_name!r})"
             raise InputError(
-                f"{self.name}: scheme {self.type_name!r} needs a model with vehicle kind in "
-                f"{self.vehicle_kinds}, got {kind!r} (model {getattr(model, 'name', '?')!r})"
+                f"{self.name}{of_type}: needs a model with vehicle kind {kinds}, got {kind!r} "
+                f"(model {getattr(model, 'name', '?')!r})"
             )
         self.dt = as_scalar(dt, f"{self.name}.dt", positive=True)
         self.model = model
@@ -107,11 +109,16 @@ class Scheme(ABC):
         """Compute the rates ``zeta`` for ``state`` at time ``t`` [s].
 
         Raises:
-            InputError: the scheme is not bound, or its trajectory was never set.
+            InputError: the scheme is not bound, its trajectory was never set, or ``state`` is
+                not a State (e.g. a configuration array).
             NonFiniteError: the formula produced NaN or inf (never silently passed on).
         """
         if self.model is None:
             raise InputError(f"{self.name}: call bind(model, dt) before step()")
+        if not hasattr(state, "model"):
+            from ..controller import not_a_state
+
+            raise not_a_state(state)
         if self.needs_trajectory and self.trajectory is None:
             raise InputError(f"{self.name}: no trajectory set; call track(trajectory) first")
         start = time.perf_counter()
