@@ -3,8 +3,14 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
+
+from ..errors import ConfigError
 
 
 def scenario_command(
@@ -48,3 +54,60 @@ def scenario_command(
     parser.add_argument("--quiet", action="store_true", help=quiet_help)
     parser.set_defaults(func=func)
     return parser
+
+
+def _out_error(exc: OSError, out: str) -> ConfigError:
+    """``exc`` as the one-line ``--out: <reason>`` error of the CLI."""
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        reason = f"{out!r} exists and is not a directory"
+    else:
+        where = exc.filename if exc.filename is not None else out
+        reason = f"cannot create or write {str(where)!r}: {exc.strerror or exc}"
+    return ConfigError(reason, "--out")
+
+
+def prepare_output(out: str) -> Path:
+    """Create the output directory ``out`` and check that a file can be written into it.
+
+    Called before the simulation, so an unusable ``--out`` fails at once with a one-line message
+    instead of after a long run.
+
+    Raises:
+        ConfigError: ``out`` is a file, cannot be created, or is not writable (path ``--out``).
+    """
+    directory = Path(out)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as exc:
+        raise _out_error(exc, out) from None
+    return directory
+
+
+@contextmanager
+def writing_output(out: str) -> Iterator[None]:
+    """Report an OS error while writing the outputs into ``out`` as the ``--out`` error."""
+    try:
+        yield
+    except OSError as exc:
+        raise _out_error(exc, out) from None
+
+
+@contextmanager
+def output_directory(out: str) -> Iterator[Path]:
+    """:func:`prepare_output` around a run, undone if the run fails before writing anything.
+
+    Yields:
+        The output directory; removed again when this call created it and the body raised
+        while it is still empty.
+    """
+    existed = os.path.isdir(out)
+    directory = prepare_output(out)
+    try:
+        yield directory
+    except BaseException:
+        if not existed and not any(directory.iterdir()):
+            directory.rmdir()
+        raise

@@ -3,16 +3,20 @@
 Runs the scenario's HQP stack and each closed-form scheme listed in its ``schemes`` (the papers'
 redundancy resolutions, see :mod:`uvms_qp.schemes`), writes ``DIR/<scheme>/results.json`` per
 scheme, ``DIR/comparison.md`` and ``DIR/comparison.json`` (the side-by-side metrics table) and
-PNG figures with the schemes overlaid, and prints the table. An invalid scenario or an unknown
-scheme exits with status 2 and a one-line message.
+PNG figures with the schemes overlaid, and prints the table. A run that breaks the scenario's
+hard bounds is marked ``(exceeded)`` in the table and named in a warning: the closed-form schemes
+ignore the bounds, although each of their steps reports status ``optimal``. An invalid scenario,
+an unknown scheme or an unusable ``--out`` (checked before anything runs) exits with status 2 and
+a one-line message.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
-from ._common import scenario_command
+from ._common import output_directory, scenario_command, writing_output
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
@@ -35,16 +39,14 @@ def _print_table(comparison: Any) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from ..schemes.comparison import format_value
-
     table = Table(title=f"{comparison.scenario}: {comparison.description}")
     table.add_column("metric", no_wrap=True)
     table.add_column("unit", no_wrap=True)
     for run in comparison.runs:
         table.add_column(run.name, justify="right", no_wrap=True)
-    for key, unit, values in comparison.table():
-        table.add_row(key, unit, *(format_value(v) for v in values))
-    width = 40 + sum(max(12, len(run.name) + 3) for run in comparison.runs)
+    for key, unit, texts in comparison.cells():
+        table.add_row(key, unit, *texts)
+    width = 40 + sum(max(22, len(run.name) + 3) for run in comparison.runs)
     Console(width=max(100, width)).print(table)
 
 
@@ -58,11 +60,15 @@ def run(args: argparse.Namespace) -> int:
     subset = None
     if args.schemes:
         subset = [name.strip() for name in args.schemes.split(",") if name.strip()]
-    comparison = compare(scenario, subset, progress=not args.quiet)
-    comparison.write(args.out)
-    if not args.no_plots:
-        plot_comparison(comparison, scenario.model, args.out)
+    with output_directory(args.out):
+        comparison = compare(scenario, subset, progress=not args.quiet)
+        with writing_output(args.out):
+            comparison.write(args.out)
+            if not args.no_plots:
+                plot_comparison(comparison, scenario.model, args.out)
     if not args.quiet:
         _print_table(comparison)
         print(f"results, comparison.md and figures in {args.out}")
+    for note in comparison.notes():
+        print(f"warning: {note}", file=sys.stderr)
     return 0

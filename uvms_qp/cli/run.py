@@ -3,7 +3,8 @@
 ``SCENARIO`` is a TOML file or the name of a bundled scenario (``uvms-qp run bluerov2_demo``).
 The scenario is fully validated before anything is written: an invalid file exits with status 2
 and a one-line message carrying the field path, without a traceback and without creating
-``DIR/results.json``.
+``DIR/results.json``. ``DIR`` is created before the simulation starts: an unusable ``--out`` (an
+existing file, a place that cannot be written) fails at once the same way.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._common import scenario_command
+from ._common import output_directory, scenario_command, writing_output
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
@@ -56,7 +57,7 @@ def _summary(metrics: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate, simulate; write ``results.json`` and the figures into ``args.out``."""
-    from ..errors import ConfigError
+    from ..errors import ConfigError, UnknownSolverError
     from ..sim.plots import plot_results
     from ..sim.results import write_results
     from ..sim.runner import simulate
@@ -66,17 +67,22 @@ def run(args: argparse.Namespace) -> int:
     if args.duration is not None and not args.duration > 0.0:
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}",
                           "--duration")
-    scheme = scenario.make_controller(args.solver) if args.solver else None
-    result = simulate(
-        scenario,
-        scheme,
-        duration=args.duration,
-        progress=not args.quiet,
-    )
-    if args.solver:
-        result.solver = args.solver
-    path = write_results(result, args.out)
-    figures = [] if args.no_plots else plot_results(result, args.out)
+    try:
+        scheme = scenario.make_controller(args.solver) if args.solver else None
+    except UnknownSolverError as exc:
+        raise ConfigError(str(exc), "--solver") from None
+    with output_directory(args.out):
+        result = simulate(
+            scenario,
+            scheme,
+            duration=args.duration,
+            progress=not args.quiet,
+        )
+        if args.solver:
+            result.solver = args.solver
+        with writing_output(args.out):
+            path = write_results(result, args.out)
+            figures = [] if args.no_plots else plot_results(result, args.out)
     if not args.quiet:
         print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s in "
               f"{result.wall_time:.2f} s -> {path}"

@@ -12,6 +12,12 @@ Besides the simulator's metrics, the table reports a few that the papers' claims
 ``vehicle_yaw_final`` [rad], and ``tool_base_radius_max``/``_mean`` [m], the horizontal distance
 of the tool from the arm base z axis (``sqrt(x_E^2 + y_E^2)`` in the arm base frame): the payload
 moment per newton of ``003_229789978cc4b235.txt, Eq. (20)``.
+
+The closed-form schemes are the papers' unconstrained resolutions: they ignore the scenario's hard
+bounds, while each of their steps reports status ``optimal`` (the formula was evaluated). A run
+whose ``bound_violation_max`` exceeds :data:`BOUND_TOLERANCE` is therefore marked ``(exceeded)``
+in the table and named in :meth:`Comparison.notes` (also in ``comparison.md`` and, with
+``exceeds_hard_bounds`` per scheme, in ``comparison.json``).
 """
 
 from __future__ import annotations
@@ -51,6 +57,12 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("step_time_median_us", "us"),
     ("nan_steps", ""),
 )
+
+#: Largest hard-row violation (units of the rows: [m/s], [rad/s], ...) a run may show before the
+#: table flags it as exceeding the hard bounds.
+BOUND_TOLERANCE = 1e-6
+#: Marker of a closed-form run that exceeds the scenario's hard bounds.
+BOUNDS_NOTE = "exceeds hard bounds (closed-form schemes ignore them)"
 
 
 class _Recorder:
@@ -136,15 +148,52 @@ class Comparison:
                 rows.append((key, unit, values))
         return rows
 
+    def exceeds_bounds(self, run: SchemeRun) -> bool:
+        """True when ``run`` broke a hard row (box or inequality) by more than the tolerance.
+
+        A closed-form scheme reports every step as ``optimal`` (its formula was evaluated), yet
+        the papers' schemes ignore the scenario's hard bounds: this is the check that says so.
+        """
+        value = run.metrics.get("bound_violation_max")
+        if value is None:
+            return False
+        return not float(value) <= BOUND_TOLERANCE  # NaN counts as exceeded
+
+    def notes(self) -> list[str]:
+        """One line per run that exceeds the hard bounds, with the largest violation."""
+        lines = []
+        for run in self.runs:
+            if self.exceeds_bounds(run):
+                what = "exceeds hard bounds" if run.name == "hqp" else BOUNDS_NOTE
+                value = format_value(run.metrics.get("bound_violation_max"))
+                lines.append(f"{run.name}: {what}, by up to {value} (bound_violation_max); "
+                             "its steps' status does not show it")
+        return lines
+
+    def cells(self) -> list[tuple[str, str, list[str]]]:
+        """:meth:`table` as text, with the bound violations that exceed the tolerance marked."""
+        rows = []
+        for key, unit, values in self.table():
+            texts = [format_value(v) for v in values]
+            if key == "bound_violation_max":
+                texts = [f"{text} (exceeded)" if self.exceeds_bounds(run) else text
+                         for run, text in zip(self.runs, texts, strict=True)]
+            rows.append((key, unit, texts))
+        return rows
+
     def markdown(self) -> str:
-        """The table as GitHub markdown (one column per scheme)."""
+        """The table as GitHub markdown (one column per scheme), then the notes, if any."""
         names = [run.name for run in self.runs]
         lines = [
             f"| metric | unit | {' | '.join(names)} |",
             "|---|---|" + "---|" * len(names),
         ]
-        for key, unit, values in self.table():
-            lines.append(f"| {key} | {unit} | {' | '.join(format_value(v) for v in values)} |")
+        for key, unit, texts in self.cells():
+            lines.append(f"| {key} | {unit} | {' | '.join(texts)} |")
+        notes = self.notes()
+        if notes:
+            lines.append("")
+            lines.extend(f"- {note}" for note in notes)
         return "\n".join(lines)
 
     def write(self, out_dir: str | Path) -> list[Path]:
@@ -174,6 +223,8 @@ class Comparison:
             "schemes": [run.name for run in self.runs],
             "metrics": {key: {"unit": unit, "values": [_json_value(v) for v in values]}
                         for key, unit, values in self.table()},
+            "exceeds_hard_bounds": [self.exceeds_bounds(run) for run in self.runs],
+            "notes": self.notes(),
         }
         js = directory / "comparison.json"
         js.write_text(json.dumps(table, allow_nan=False, indent=1), encoding="utf-8")
