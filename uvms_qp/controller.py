@@ -570,12 +570,11 @@ class Controller:
             NoSolutionFound: strict mode, and no back-end returned a verified solution.
         """
         start = time.perf_counter()
-        try:
-            model = state.model
-        except AttributeError:  # costs nothing on the happy path
+        try:  # a try block costs nothing on the happy path
+            if state.model is not self.model:
+                raise InputError("state: belongs to another model than the controller's")
+        except AttributeError:
             raise not_a_state(state) from None
-        if model is not self.model:
-            raise InputError("state: belongs to another model than the controller's")
         self._fill(state, t)
         self._fill_box(state)
         for c, HA, Hlo, Hhi in self._row_slots:
