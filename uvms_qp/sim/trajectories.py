@@ -8,7 +8,9 @@ orientation is prescribed, the rotation ``R(t) = R_world_frame`` and the angular
 
 Time is clamped: before ``start_time`` a trajectory holds its first sample, after
 ``start_time + duration`` its last one, both with zero velocity. Planar scenarios use the same
-3-vectors with ``z = 0`` (a 2-vector input is padded with ``z = 0``).
+3-vectors with ``z = 0``: points may be given as ``(x, y)``, all of a trajectory's points with the
+same number of coordinates, and :attr:`Trajectory.dimension` records 2 so that a task bound to a
+non-planar model rejects the trajectory instead of driving the frame to ``z = 0``.
 
 Rotations between two orientations follow the geodesic ``R(s) = R0 Exp(s log(R0^T R1))``, whose
 world angular velocity is ``omega = R0 log(R0^T R1) s_dot`` (the axis is constant along a geodesic).
@@ -49,14 +51,36 @@ class TrajectorySample:
     angular_velocity: FloatArray | None = None
 
 
-def _point(value: Any, name: str) -> FloatArray:
-    """Return a 3-vector [m]; a 2-vector (planar) gets ``z = 0``."""
-    array = as_vector(value, name)
-    if array.shape[0] == 2:
-        array = np.array([array[0], array[1], 0.0])
-    if array.shape[0] != 3:
-        raise ShapeError(f"{name}: expected 2 or 3 coordinates, got {array.shape[0]}")
-    return array
+def _points(named: Sequence[tuple[str, Any]]) -> tuple[list[FloatArray], int]:
+    """Validate points given with the same number of coordinates; return them as 3-vectors.
+
+    Args:
+        named: ``(argument name, value)`` pairs, each 2 ``(x, y)`` or 3 ``(x, y, z)`` values [m].
+
+    Returns:
+        The points as 3-vectors (``z = 0`` for 2 values) and the number of coordinates given.
+
+    Raises:
+        ShapeError: a point with neither 2 nor 3 coordinates.
+        InputError: two points with different numbers of coordinates (a 2-value point next to
+            a 3-value one would silently be taken at ``z = 0``).
+    """
+    out: list[FloatArray] = []
+    first = ""
+    size = 0
+    for name, value in named:
+        array = as_vector(value, name)
+        if array.shape[0] not in (2, 3):
+            raise ShapeError(f"{name}: expected 2 or 3 coordinates, got {array.shape[0]}")
+        if not out:
+            first, size = name, array.shape[0]
+        elif array.shape[0] != size:
+            raise InputError(
+                f"{name}: got {array.shape[0]} coordinates but {first} has {size}; give every "
+                "point 3 coordinates (x, y, z), or 2 (x, y) on planar models"
+            )
+        out.append(array if size == 3 else np.array([array[0], array[1], 0.0]))
+    return out, size
 
 
 def as_rotation(value: Any, name: str) -> FloatArray:
@@ -100,7 +124,11 @@ class Trajectory(ABC):
     Attributes:
         duration: Length of the moving part [s].
         start_time: Time at which the motion starts [s]; the first sample is held before it.
+        dimension: Number of coordinates the points were given with: 3 ``(x, y, z)``, or 2
+            ``(x, y)`` for a planar trajectory (samples are still 3-vectors, with ``z = 0``).
     """
+
+    dimension: int = 3
 
     def __init__(self, duration: float, start_time: float = 0.0) -> None:
         self.duration = as_scalar(duration, "duration", positive=True)
@@ -153,8 +181,8 @@ class SegmentTrajectory(Trajectory):
     ``start_rotation`` and ``goal_rotation`` are given, follows the geodesic with the same ``s``.
 
     Args:
-        start: Start position (3,) [m], world frame.
-        goal: Goal position (3,) [m], world frame.
+        start: Start position (3,) [m], world frame (or ``(x, y)`` for a planar model).
+        goal: Goal position [m], world frame, with as many coordinates as ``start``.
         duration: Motion time T [s] (> 0).
         start_rotation: Optional start orientation (3x3 or roll-pitch-yaw [rad]).
         goal_rotation: Optional goal orientation; defaults to ``start_rotation``.
@@ -176,8 +204,7 @@ class SegmentTrajectory(Trajectory):
         if profile not in ("quintic", "linear"):
             raise InputError(f"profile: expected 'quintic' or 'linear', got {profile!r}")
         self.profile: Profile = profile
-        self.start = _point(start, "start")
-        self.goal = _point(goal, "goal")
+        (self.start, self.goal), self.dimension = _points([("start", start), ("goal", goal)])
         self._delta = self.goal - self.start
         self._geodesic: _Geodesic | None = None
         if start_rotation is None and goal_rotation is not None:
@@ -262,7 +289,7 @@ class CircleTrajectory(Trajectory):
         start_time: float = 0.0,
     ) -> None:
         super().__init__(duration, start_time)
-        self.center = _point(center, "center")
+        (self.center,), self.dimension = _points([("center", center)])
         self.radius = as_scalar(radius, "radius", positive=True)
         self.turns = as_scalar(turns, "turns")
         if self.turns == 0.0:
@@ -299,7 +326,7 @@ class WaypointTrajectory(Trajectory):
     of each segment.
 
     Args:
-        points: Waypoints (k >= 2, 3) [m], world frame.
+        points: Waypoints (k >= 2, 3) [m], world frame (or all ``(x, y)`` for a planar model).
         times: Strictly increasing arrival times (k,) [s], ``times[0] >= 0``.
         rotations: Optional orientation per waypoint (3x3 or roll-pitch-yaw [rad]).
     """
@@ -310,7 +337,7 @@ class WaypointTrajectory(Trajectory):
         times: Sequence[float],
         rotations: Sequence[Any] | None = None,
     ) -> None:
-        pts = [_point(p, f"points[{i}]") for i, p in enumerate(points)]
+        pts, dimension = _points([(f"points[{i}]", p) for i, p in enumerate(points)])
         if len(pts) < 2:
             raise InputError(f"points: expected at least 2 waypoints, got {len(pts)}")
         ts = as_vector(times, "times", len(pts))
@@ -321,6 +348,7 @@ class WaypointTrajectory(Trajectory):
         super().__init__(float(ts[-1] - ts[0]), float(ts[0]))
         self.points = np.array(pts)
         self.times = ts
+        self.dimension = dimension
         rots: list[FloatArray] | None = None
         if rotations is not None:
             if len(rotations) != len(pts):
@@ -357,7 +385,7 @@ class FixedTarget(Trajectory):
 
     def __init__(self, position: Sequence[float], rotation: Any = None) -> None:
         super().__init__(1.0, 0.0)
-        self.position = _point(position, "position")
+        (self.position,), self.dimension = _points([("position", position)])
         self.rotation = None if rotation is None else as_rotation(rotation, "rotation")
 
     def _sample(self, local_t: float) -> TrajectorySample:

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from .._validation import FloatArray, as_vector
-from ..errors import InputError
+from ..errors import InputError, ShapeError
 from ._common import (
     TWIST_AXES,
     as_point,
@@ -88,8 +88,7 @@ class EndEffectorTask(ErrorTask):
                              f"got {mode!r}")
         self.frame = frame
         self.mode = mode
-        self._axes_arg = None if axes is None else parse_axes(
-            axes, _MODE_AXES[mode], f"{self.name}.axes")
+        self._axes_arg = None if axes is None else self._parse_axes(axes)
         self.axes: list[str] = []
         self._p_d: FloatArray | None = None
         self._R_d: FloatArray | None = None
@@ -109,6 +108,20 @@ class EndEffectorTask(ErrorTask):
             self.set_target(position=position, rotation=rotation)
         if trajectory is not None:
             self.track(trajectory)
+
+    def _parse_axes(self, axes: Any) -> list[str]:
+        """Validate ``axes`` for the mode; an axis of another mode says which mode it needs."""
+        allowed = _MODE_AXES[self.mode]
+        names = [axes] if isinstance(axes, str) else axes
+        if isinstance(names, list | tuple):
+            for a in names:
+                if isinstance(a, str) and a in TWIST_AXES and a not in allowed:
+                    needs = ('mode = "orientation" or "pose"' if a.startswith("r")
+                             else 'mode = "position" or "pose"')
+                    raise InputError(
+                        f"{self.name}.axes: axis {a!r} is not controlled in mode {self.mode!r} "
+                        f"(known axes: {', '.join(allowed)}); {a!r} needs {needs}")
+        return parse_axes(axes, allowed, f"{self.name}.axes")
 
     # ------------------------------------------------------------------------------------ target
     def set_target(self, position: Any = None, rotation: Any = None, velocity: Any = None,
@@ -135,12 +148,45 @@ class EndEffectorTask(ErrorTask):
         self._trajectory = None
 
     def track(self, trajectory: Any) -> None:
-        """Follow ``trajectory`` (an object with ``sample(t)``) from now on."""
+        """Follow ``trajectory`` (an object with ``sample(t)``) from now on.
+
+        Raises:
+            InputError: no ``sample`` method.
+            ShapeError: (once bound) the trajectory's points have 2 coordinates and the model
+                is not planar, or its samples are not 3-vectors.
+        """
         if not callable(getattr(trajectory, "sample", None)):
             raise InputError(f"{self.name}.trajectory: expected an object with sample(t), "
                              f"got {type(trajectory).__name__}")
+        if self.model is not None:
+            self._check_trajectory(trajectory, self.model.vehicle_kind)
         self._trajectory = trajectory
         self._planar_points.clear()
+
+    def _check_trajectory(self, trajectory: Any, vehicle_kind: str) -> None:
+        """Reject a trajectory whose positions do not fit the model.
+
+        The number of coordinates is the trajectory's ``dimension`` attribute when it has one
+        (2 for points given as ``(x, y)``, see :mod:`uvms_qp.sim.trajectories`), else the size
+        of its position sampled once at its start time.
+
+        Raises:
+            ShapeError: 2 coordinates on a non-planar model (as for a 2-value ``position``), or
+                a sampled position that is not a 3-vector.
+        """
+        label = f"{self.name}.trajectory"
+        dimension = getattr(trajectory, "dimension", None)
+        if dimension is None:
+            start = getattr(trajectory, "start_time", 0.0)
+            position = trajectory.sample(start if isinstance(start, int | float) else 0.0).position
+            dimension = int(np.size(position))
+            if dimension == 2:
+                check_planar_point(label, vehicle_kind)
+            if dimension != 3:
+                raise ShapeError(f"{label}: sample(t).position has {dimension} coordinates; "
+                                 "expected 3 (x, y, z), with z = 0 on planar models")
+        elif dimension == 2:
+            check_planar_point(label, vehicle_kind)
 
     def _point(self, value: Any, key: str) -> FloatArray:
         """Validate a point argument; remember a 2-value one until the model kind is known."""
@@ -196,6 +242,8 @@ class EndEffectorTask(ErrorTask):
         check_frame(model, self.frame, f"{self.name}.frame")
         for key in sorted(self._planar_points):
             check_planar_point(f"{self.name}.{key}", model.vehicle_kind)
+        if self._trajectory is not None:
+            self._check_trajectory(self._trajectory, model.vehicle_kind)
         if self._axes_arg is not None:
             axes = self._axes_arg
         elif model.vehicle_kind == "planar":
