@@ -4,7 +4,9 @@ Two tools used by the scenario loader (:mod:`uvms_qp.sim.scenario`):
 
 - :class:`Table` wraps one TOML table and its path (``levels[1].tasks[0]``); each ``take_*``
   method reads, type-checks and range-checks one key, and :meth:`Table.finish` rejects any key that
-  was not read (unknown keys are errors, with the list of known ones).
+  was not read (unknown keys are errors, with the list of known ones). A missing required key is
+  reported only after the table's unknown keys, so a misspelt required key (``durration``) is
+  named as the unknown key it is.
 - :func:`construct` builds an object (task, constraint, trajectory) from a table by introspecting
   its class's keyword constructor: keys must be constructor parameters, values are checked against
   the simple type hints (``float``, ``int``, ``str``, ``bool``, ``list[float]``, ``Literal[...]``,
@@ -17,6 +19,7 @@ Every error is a :class:`~uvms_qp.errors.ConfigError` whose ``path`` names the f
 
 from __future__ import annotations
 
+import difflib
 import inspect
 import math
 import re
@@ -138,13 +141,17 @@ class Table:
     Args:
         data: The parsed table.
         path: Its field path (``""`` for the top level).
+        keys: Every key the table may hold, when the reader knows them up front; a missing
+            required key is then reported after any key not in this list. Without it, a key
+            close to the missing one (a misspelling) is reported instead.
     """
 
-    def __init__(self, data: Any, path: str) -> None:
+    def __init__(self, data: Any, path: str, keys: Sequence[str] | None = None) -> None:
         if not isinstance(data, dict):
             raise ConfigError(f"expected a table, got {describe(data)}", path)
         self.data: dict[str, Any] = data
         self.path = path
+        self.keys = None if keys is None else tuple(keys)
         self._read: set[str] = set()
 
     def at(self, key: str) -> str:
@@ -160,9 +167,33 @@ class Table:
         self._read.add(key)
         if key not in self.data:
             if required:
+                self._check_unknown_before_missing(key)
                 raise ConfigError(f"missing required field {key!r}", self.path or key)
             return default
         return self.data[key]
+
+    def _check_unknown_before_missing(self, missing: str) -> None:
+        """Raise on an unknown key before ``missing`` is reported as absent.
+
+        With declared :attr:`keys`, any key outside them is unknown; otherwise only an unread key
+        that looks like a misspelling of ``missing`` (``difflib`` ratio >= 0.75) is, since the
+        table's other keys may still be read later.
+
+        Raises:
+            ConfigError: at the unknown key, suggesting ``missing`` when it is close.
+        """
+        if self.keys is not None:
+            unknown = [k for k in self.data if k not in self.keys]
+        else:
+            unread = [k for k in self.data if k not in self._read]
+            unknown = difflib.get_close_matches(missing, unread, n=1, cutoff=0.75)
+        if not unknown:
+            return
+        key = unknown[0]
+        close = difflib.get_close_matches(key, [missing], n=1, cutoff=0.75)
+        hint = f" (did you mean {missing!r}?)" if close else ""
+        known = "" if self.keys is None else f"; known keys: {', '.join(sorted(self.keys))}"
+        raise ConfigError(f"unknown key {key!r}{hint}{known}", self.at(key))
 
     def take_number(
         self, key: str, default: float | None = None, *, required: bool = False, **checks: Any
@@ -220,21 +251,25 @@ class Table:
             raise ConfigError(f"expected an array of strings, got {describe(value)}", self.at(key))
         return list(value)
 
-    def take_table(self, key: str, *, required: bool = False) -> Table | None:
-        """Read a sub-table."""
+    def take_table(
+        self, key: str, *, required: bool = False, keys: Sequence[str] | None = None
+    ) -> Table | None:
+        """Read a sub-table (``keys``: its possible keys, see :class:`Table`)."""
         value = self.raw(key, required=required)
         if value is None:
             return None
-        return Table(value, self.at(key))
+        return Table(value, self.at(key), keys)
 
-    def take_tables(self, key: str, *, required: bool = False) -> list[Table]:
-        """Read an array of tables (``[[key]]``)."""
+    def take_tables(
+        self, key: str, *, required: bool = False, keys: Sequence[str] | None = None
+    ) -> list[Table]:
+        """Read an array of tables (``[[key]]``; ``keys``: their possible keys)."""
         value = self.raw(key, required=required)
         if value is None:
             return []
         if not isinstance(value, list):
             raise ConfigError(f"expected an array of tables, got {describe(value)}", self.at(key))
-        return [Table(item, join(self.at(key), i)) for i, item in enumerate(value)]
+        return [Table(item, join(self.at(key), i), keys) for i, item in enumerate(value)]
 
     def finish(self) -> None:
         """Raise on any key that was not read: unknown keys are errors.

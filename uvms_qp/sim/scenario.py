@@ -43,6 +43,13 @@ from .trajectories import TRAJECTORY_TYPES, Trajectory
 #: Largest number of steps a scenario may ask for (duration / dt).
 MAX_STEPS = 2_000_000
 _SCENARIO_PACKAGE = "uvms_qp.scenarios"
+#: Keys of the top-level table (``docs/scenarios.md``); a required key is reported missing only
+#: when no other key is unknown, so a misspelt ``duration`` is named as the unknown key.
+_TOP_KEYS = (
+    "name", "description", "model", "dt", "duration", "solver", "strict", "deadline", "metric",
+    "schemes", "integrator", "initial", "current", "passive", "trajectories", "constraints",
+    "levels", "events", "tracking", "phases",
+)
 
 
 @dataclass(frozen=True)
@@ -403,7 +410,13 @@ class _TaskResolver:
             if isinstance(value, dict):
                 return _build_trajectory(Table(value, path))
             raise ConfigError("expected a trajectory name or an inline trajectory table", path)
-        if key == "heading" and value == "current":
+        if key == "heading" and isinstance(value, str):
+            if value != "current":
+                raise ConfigError(
+                    f"expected a number [rad] or the string 'current' (the direction of the "
+                    f"[current] table), got {value!r}",
+                    path,
+                )
             if self.current is None:
                 raise ConfigError("'current' needs a [current] table in the scenario", path)
             return self.current.heading
@@ -448,7 +461,7 @@ def _build_levels(
 ) -> tuple[list[list[Any]], dict[str, tuple[Any, Table]]]:
     levels: list[list[Any]] = []
     by_name: dict[str, tuple[Any, Table]] = {}
-    level_tables = top.take_tables("levels", required=True)
+    level_tables = top.take_tables("levels", required=True, keys=("tasks",))
     if not level_tables:
         raise ConfigError("expected at least one level", top.at("levels"))
     for level_table in level_tables:
@@ -500,9 +513,10 @@ def _build_events(
     duration: float,
     tasks: dict[str, tuple[Any, Table]],
     resolver: _TaskResolver,
+    model: Any,
 ) -> list[Event]:
     events = []
-    for table in top.take_tables("events"):
+    for table in top.take_tables("events", keys=("time", "task", "update")):
         time = float(table.take_number("time", required=True, minimum=0.0, maximum=duration) or 0)
         name = str(table.take_str("task", required=True))
         update_table = table.take_table("update", required=True) or Table({}, "")
@@ -530,18 +544,29 @@ def _build_events(
             if converted is NOT_HANDLED:
                 converted = convert(value, hints.get(key, Any), path)
             update[key] = converted
-        _dry_run_update(cls, task_table, resolver, update, update_table.path)
+        _dry_run_update(cls, task_table, resolver, model, update, update_table.path)
         events.append(Event(float(time), name, update, table.path))
     events.sort(key=lambda e: e.time)
     return events
 
 
 def _dry_run_update(
-    cls: type, task_table: Table, resolver: _TaskResolver, update: dict[str, Any], path: str
+    cls: type,
+    task_table: Table,
+    resolver: _TaskResolver,
+    model: Any,
+    update: dict[str, Any],
+    path: str,
 ) -> None:
-    """Validate an event's update on a scratch copy of the task (its constructor's table)."""
+    """Validate an event's update on a scratch copy of the task (its constructor's table).
+
+    The copy is bound to ``model`` first, so checks that need the model (a 2-coordinate
+    ``position`` on a spatial model, a trajectory's dimension) fail here, at the event's path,
+    rather than when the event fires.
+    """
     scratch = construct(cls, Table(dict(task_table.data), task_table.path), resolver=resolver,
                         kind="task")
+    _bind(scratch, model, task_table, dict(task_table.data))
     method = getattr(scratch, "update", None)
     if method is None:
         raise ConfigError(f"task type {cls.__name__} has no run-time update", path)
@@ -553,7 +578,7 @@ def _dry_run_update(
 
 def _build_phases(top: Table, duration: float) -> list[Phase]:
     phases: list[Phase] = []
-    for table in top.take_tables("phases"):
+    for table in top.take_tables("phases", keys=("name", "start", "end")):
         name = str(table.take_str("name", required=True))
         start = float(table.take_number("start", required=True, minimum=0.0) or 0.0)
         end = float(table.take_number("end", required=True, maximum=duration) or 0.0)
@@ -638,7 +663,7 @@ def scenario_from_dict(
         default_tasks, default_constraints = _registries()
         task_types = task_types or default_tasks
         constraint_types = constraint_types or default_constraints
-    top = Table(data, "")
+    top = Table(data, "", _TOP_KEYS)
     scenario_name = top.take_str("name", name) or name
     description = top.take_str("description", "") or ""
     model = _load_model(top)
@@ -663,7 +688,7 @@ def scenario_from_dict(
     schemes = _check_schemes(top)
     method = top.take_str("integrator", "euler", choices=("euler", "rk4"))
     q0 = _initial_configuration(top.take_table("initial"), model)
-    current = _build_current(top.take_table("current"))
+    current = _build_current(top.take_table("current", keys=("direction", "speed", "drift")))
     passive_table = top.take_table("passive")
     passive, tau = "hold", 2.0
     if passive_table is not None:
@@ -683,7 +708,7 @@ def scenario_from_dict(
     resolver = _TaskResolver(trajectories, current)
     constraints = _build_constraints(top, model, constraint_types)
     levels, tasks = _build_levels(top, model, task_types, resolver, model.state(q0))
-    events = _build_events(top, duration, tasks, resolver)
+    events = _build_events(top, duration, tasks, resolver, model)
     tracking = _tracking_task(top, tasks)
     phases = _build_phases(top, duration)
     top.finish()
