@@ -1,0 +1,97 @@
+"""Instructions per control step of uvms-qp and Pink, counted by valgrind (repeatable).
+
+Wall-clock medians on a shared virtual machine move by tens of percent between runs; the number
+of instructions a step executes hardly does. This script runs each loop of
+``bench_controller.py`` (our 4-level stack, our stack with Pink's content, Pink) in a fresh
+Python process under ``valgrind --tool=callgrind`` twice, with ``W`` warm-up ticks and then with
+``W + N`` ticks, and reports ``(I(W + N) - I(W)) / N``: the instructions of one closed-loop tick,
+start-up and warm-up subtracted. Start-up itself varies by about 0.5 % between processes (some
+ten million instructions), hence the default of 2000 counted ticks; two runs of the same code
+then agree within about 1 %. Instructions are not seconds (work in C retires more instructions
+per cycle than the interpreter), so read the ratio next to the wall-clock ratio of
+``bench_controller.py``, not instead of it. The loops follow their motion for ``W + N`` ticks,
+so a different ``N`` measures a different stretch of it.
+
+Needs valgrind (Debian: ``apt-get install valgrind``) and Pink (``pip install -e ".[pink]"``).
+Each loop takes about a minute under valgrind.
+
+    python benchmarks/bench_instructions.py [--ticks 2000] [--warmup 50]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+LOOPS = {
+    "ours": "uvms-qp, 4-level stack + all bounds",
+    "small": "uvms-qp, Pink's content (tool + posture, 1 level)",
+    "pink": "Pink, FrameTask + PostureTask + limits",
+}
+
+
+def run_loop(which: str, warmup: int, ticks: int) -> None:
+    """Run ``warmup + ticks`` closed-loop ticks of one loop (the process valgrind counts)."""
+    sys.path.insert(0, str(HERE))
+    import bench_controller as bc
+
+    from uvms_qp.model import load_model
+
+    model = load_model("bluerov2_heavy_alpha5")
+    q0 = model.home()
+    traj = bc.Circle(model.frame_pose(q0, "tool")[:3, 3])
+    if which == "pink":
+        tick = bc.pink_stepper(model, q0, traj, "daqp")[0]
+    else:
+        stack = bc.small_stack(traj) if which == "small" else None
+        tick = bc.ours_stepper(model, q0, traj, "daqp", stack)[0]
+    for k in range(warmup + ticks):
+        tick(k)
+
+
+def count(which: str, warmup: int, ticks: int) -> int:
+    """Instructions valgrind counts for one process running ``warmup + ticks`` ticks."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "callgrind.out"
+        proc = subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable,
+             __file__, "--run", which, "--warmup", str(warmup), "--ticks", str(ticks)],
+            capture_output=True, text=True, check=False,
+            env={**os.environ, "PYTHONHASHSEED": "0"})  # the same dict layouts every run
+    match = re.search(r"Collected\s*:\s*(\d+)", proc.stderr)
+    if proc.returncode != 0 or match is None:
+        raise SystemExit(f"valgrind run of {which!r} failed:\n{proc.stderr[-2000:]}")
+    return int(match.group(1))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ticks", type=int, default=2000, help="counted ticks per loop")
+    parser.add_argument("--warmup", type=int, default=50, help="ticks before counting")
+    parser.add_argument("--run", choices=sorted(LOOPS), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.run:
+        run_loop(args.run, args.warmup, args.ticks)
+        return
+    if shutil.which("valgrind") is None:
+        raise SystemExit("valgrind not found: install it (Debian: apt-get install valgrind)")
+    per_tick = {}
+    for which, label in LOOPS.items():
+        base = count(which, args.warmup, 0)
+        total = count(which, args.warmup, args.ticks)
+        per_tick[which] = (total - base) / args.ticks
+        print(f"{label:<52} {per_tick[which] / 1e3:9.1f} k instructions per tick")
+    pink = per_tick["pink"]
+    print(f"ratio ours / Pink (instructions): 4-level stack {per_tick['ours'] / pink:.2f}, "
+          f"same content {per_tick['small'] / pink:.2f}")
+
+
+if __name__ == "__main__":
+    main()
