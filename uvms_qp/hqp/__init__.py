@@ -24,10 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray, as_vector
+from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
 from .backends import BackendOutput
 from .evaluate import evaluate, evaluate_stacked
+from .inplace import check_settings
 from .loading import load_levels
 from .problem import Problem, normalize_problem
 from .registry import SOLVERS, SolverSpec, available_solvers, get_spec
@@ -46,6 +47,41 @@ __all__ = [
     "normalize_problem",
     "solve_hierarchy",
 ]
+
+
+_NULLSPACE_OPTIONS = frozenset(("rcond", "atol"))
+_COMMON_OPTIONS = frozenset(("level_tol", "hard_tol"))
+
+
+def _check_options(spec: SolverSpec, options: Any) -> dict[str, Any]:
+    """A copy of the back-end options after checking that they are a dict of known keys.
+
+    ``"daqp"`` takes DAQP settings and ``rho_ladder``, ``"nullspace"`` takes ``rcond`` and
+    ``atol``; a cascade passes unknown keys on to its qpsolvers back-end, so only their type
+    is checked. Every solver takes ``level_tol`` and ``hard_tol``.
+
+    Raises:
+        InputError: ``options`` is not a dict, or a key is unknown for the solver (the message
+            lists the known ones).
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, dict):
+        raise InputError(f"options: expected a dict, got {type(options).__name__}")
+    for key in options:
+        if not isinstance(key, str):
+            raise InputError(f"options: expected string keys, got {key!r}")
+    if spec.kind == "daqp":
+        return check_settings(options, "options", _COMMON_OPTIONS | {"rho_ladder"})
+    if spec.kind == "nullspace":
+        known = _COMMON_OPTIONS | _NULLSPACE_OPTIONS
+        for key, value in options.items():
+            if key not in known:
+                raise InputError(f"options: unknown option {key!r} for solver {spec.name!r} "
+                                 f"(known: {', '.join(sorted(known))})")
+            if key in _NULLSPACE_OPTIONS:
+                as_scalar(value, f"options[{key!r}]", nonnegative=True)
+    return dict(options)
 
 
 def _make_backend(spec: SolverSpec, options: dict[str, Any] | None, lean: bool) -> Any:
@@ -89,9 +125,11 @@ class HierarchySolver:
                  options: dict[str, Any] | None = None, *, lean: bool = True) -> None:
         self.spec = get_spec(solver)
         self.weights = weights
-        opts = dict(options or {})
-        self.level_tol = float(opts.pop("level_tol", self.spec.level_tol))
-        self.hard_tol = float(opts.pop("hard_tol", self.spec.hard_tol))
+        opts = _check_options(self.spec, options)
+        self.level_tol = as_scalar(opts.pop("level_tol", self.spec.level_tol),
+                                   "options['level_tol']", positive=True)
+        self.hard_tol = as_scalar(opts.pop("hard_tol", self.spec.hard_tol),
+                                  "options['hard_tol']", positive=True)
         self.lean = bool(lean)
         self._backend = _make_backend(self.spec, opts, self.lean)
         self._loads = self.lean and self.spec.kind == "daqp"
@@ -210,6 +248,9 @@ def solve_hierarchy(
     Repeated calls with the same ``solver`` and no ``weights``/``options`` reuse one cached
     :class:`HierarchySolver` (its back-end workspace), so a loop of calls stays cheap.
     """
+    if not isinstance(solver, str):
+        raise InputError(f"solver: expected a solver name (one of {available_solvers()}), "
+                         f"got {type(solver).__name__}")
     if weights is None and options is None:
         cached = _CACHE.get(solver)
         if cached is None:

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray, as_vector
+from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
 from .daqp_model import HierarchyModel
 from .evaluate import evaluate_stacked
@@ -46,6 +46,43 @@ from .workspace import DAQP_INF, Workspace
 BOX_ACCEPT = 1e-7
 _SOLVED = (1, 2)
 _NO_RETRY = (-1, -7)  # empty hard set, time limit: another rho_soft cannot help
+
+
+#: DAQP settings a caller may set (the keys of ``daqp.Model.settings``).
+DAQP_SETTINGS = frozenset((
+    "primal_tol", "dual_tol", "zero_tol", "pivot_tol", "progress_tol", "cycle_tol",
+    "iter_limit", "fval_bound", "eps_prox", "eta_prox", "rho_soft", "w_soft", "rel_subopt",
+    "abs_subopt", "sing_tol", "refactor_tol", "time_limit", "eq_reduction", "presolve",
+))
+
+
+def check_settings(settings: Any, name: str, extra: frozenset[str] = frozenset()) -> dict[str, Any]:
+    """Return a copy of a DAQP settings dict after checking its keys and numeric values.
+
+    Args:
+        settings: Mapping of DAQP setting names (:data:`DAQP_SETTINGS`, plus ``extra``) to numbers.
+        name: Argument name for error messages.
+        extra: Further allowed keys; their values are not checked here.
+
+    Raises:
+        InputError: not a dict, an unknown key (the message lists the known ones), or a value
+            that is not a real number.
+    """
+    if not isinstance(settings, dict):
+        raise InputError(f"{name}: expected a dict of settings, got {type(settings).__name__}")
+    for key, value in settings.items():
+        if key in extra:
+            continue
+        if not isinstance(key, str) or key not in DAQP_SETTINGS:
+            known = ", ".join(sorted(DAQP_SETTINGS | extra))
+            raise InputError(f"{name}: unknown setting {key!r} (known: {known})")
+        as_scalar(value, f"{name}[{key!r}]", allow_inf=True)
+    return dict(settings)
+
+
+def _tolerance(value: Any, name: str) -> float:
+    """A finite positive tolerance (NaN would switch the check it drives off)."""
+    return as_scalar(value, name, positive=True)
 
 
 def _count(value: Any, name: str, least: int) -> int:
@@ -112,10 +149,16 @@ class InPlaceDaqp:
             raise InputError(f"W: expected positive weights, got min {W.min():g}")
         if settings is None:
             settings = {k: v for k, v in spec.settings.items() if k != "rho_ladder"}
+        else:
+            settings = check_settings(settings, "settings")
         if rho_ladder is None:
             rho_ladder = spec.settings.get("rho_ladder", ())
-        level_tol = spec.level_tol if level_tol is None else float(level_tol)
-        hard_tol = spec.hard_tol if hard_tol is None else float(hard_tol)
+        elif isinstance(rho_ladder, str | bytes) or not isinstance(rho_ladder, Sequence):
+            raise InputError(f"rho_ladder: expected a list of positive numbers, got {rho_ladder!r}")
+        else:
+            rho_ladder = [_tolerance(r, f"rho_ladder[{k}]") for k, r in enumerate(rho_ladder)]
+        level_tol = spec.level_tol if level_tol is None else _tolerance(level_tol, "level_tol")
+        hard_tol = spec.hard_tol if hard_tol is None else _tolerance(hard_tol, "hard_tol")
         self.ws = ws = Workspace(n, hard_rows, sizes)
         self.lo = np.zeros(ws.M)
         self.hi = np.zeros(ws.M)

@@ -10,7 +10,9 @@ hard rows of the same forms; optional bounds of length n), copies the rows into 
   infinite equality target): ``sum(lo)`` is finite or ``-inf`` and ``sum(hi)`` is finite or
   ``+inf`` (NaN propagates and ``+inf + -inf`` is NaN; a finite sum that overflows only sends
   the problem to the detailed path);
-* ``lo <= hi`` everywhere: ``min(hi - lo) >= 0``.
+* ``lo <= hi`` everywhere: ``min(hi - lo) >= 0``;
+* ``Rows`` objects hold float arrays of consistent shapes, and their weights are finite and
+  positive.
 
 Anything it does not accept (another form, a shape mismatch, an empty level, a failed check)
 returns None, and the caller runs :func:`~uvms_qp.hqp.problem.normalize_problem`, which raises
@@ -40,6 +42,9 @@ def _item(item: Any) -> _Item | None:
     if isinstance(item, Rows):
         A, lo, hi, w = item.A, item.lower, item.upper, item.weights
         if type(A) is not np.ndarray or type(lo) is not np.ndarray or type(hi) is not np.ndarray:
+            return None
+        if A.dtype.kind != "f" or (w is not None and (
+                type(w) is not np.ndarray or w.shape != lo.shape or w.dtype.kind != "f")):
             return None
     elif isinstance(item, tuple | list) and len(item) in (2, 3):
         try:
@@ -121,6 +126,8 @@ def load_levels(
             return None
         sizes.append(m)
     n = items[0][0].shape[1]
+    if n == 0:
+        return None
     for A, _, _, _ in items:
         if A.shape[1] != n:
             return None
@@ -151,5 +158,7 @@ def load_levels(
     else:
         w = np.concatenate([it[3] if it[3] is not None else np.ones(it[0].shape[0])
                             for it in level_items])
+        if not (np.isfinite(w).all() and w.min() > 0.0):
+            return None
     ws.clamp(lo, hi)
     return ws, lo, hi, w

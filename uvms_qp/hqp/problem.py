@@ -172,10 +172,29 @@ def _fast_rows(item: tuple[Any, ...] | list[Any]) -> Rows | None:
     return Rows(A, lo, hi)
 
 
+def _checked_rows(rows: Rows, label: str) -> Rows:
+    """Check a caller's ``Rows`` (built directly, so never validated) like a tuple.
+
+    Well-formed float rows pass with a few reductions; anything else is rebuilt through
+    :meth:`Rows.validated`, which raises the error naming ``label`` (and the rows' name).
+    """
+    fast = _fast_rows((rows.A, rows.lower, rows.upper))
+    w = rows.weights
+    if fast is not None and (w is None or (
+            type(w) is np.ndarray and w.dtype.kind == "f" and w.shape == fast.lower.shape
+            and np.isfinite(w).all() and (w > 0.0).all())):
+        if fast.A is rows.A and fast.lower is rows.lower and fast.upper is rows.upper:
+            return rows
+        return Rows(fast.A, fast.lower, fast.upper, w, rows.name)
+    name = f"{label} ({rows.name})" if rows.name else label
+    checked = Rows.validated(rows.A, rows.lower, rows.upper, rows.weights, name)
+    return Rows(checked.A, checked.lower, checked.upper, checked.weights, rows.name)
+
+
 def _as_rows(item: Any, label: str) -> Rows:
     """Turn one level item (Rows, (A, b) or (A, lo, hi)) into validated ``Rows``."""
     if isinstance(item, Rows):
-        return item
+        return _checked_rows(item, label)
     if isinstance(item, tuple | list) and len(item) in (2, 3):
         fast = _fast_rows(item)
         if fast is not None:
@@ -255,6 +274,8 @@ def normalize_problem(
         block, n = _stack(level, n, f"levels[{k}]")
         blocks.append(block)
     hard_block, n = _stack(list(hard) if hard is not None else [], n, "hard")
+    if n == 0:
+        raise ShapeError("levels: the rows have 0 columns (at least one variable is needed)")
     if n is None:
         for vec in (lower, upper, weights):
             if vec is not None:
