@@ -184,7 +184,13 @@ def build_dh_arm(
     if n_moving == 0:
         raise ModelError("DH table: no revolute or prismatic joint")
     if joint_names is not None:
+        if isinstance(joint_names, str | bytes) or not isinstance(joint_names, Sequence):
+            raise InputError(
+                f"joint_names: expected a list of names, got {type(joint_names).__name__}")
         given = tuple(joint_names)
+        for k, item in enumerate(given):
+            if not isinstance(item, str) or not item:
+                raise InputError(f"joint_names[{k}]: expected a non-empty string, got {item!r}")
         if len(given) != n_moving:
             raise ShapeError(f"joint_names: expected {n_moving} names, got {len(given)}")
         moving = iter(given)

@@ -457,7 +457,13 @@ class Model:
         Returns:
             ``q`` with joints uniform within limits (infinite limits clipped to ``[-pi, pi]``).
         """
-        gen = np.random.default_rng(rng)
+        position = as_scalar(position, "position", nonnegative=True)
+        tilt = as_scalar(tilt, "tilt", nonnegative=True)
+        try:
+            gen = np.random.default_rng(rng)
+        except (TypeError, ValueError) as exc:
+            raise InputError(
+                f"rng: expected a numpy Generator, a seed or None, got {rng!r}") from exc
         lo = np.maximum(self.joint_lower, -math.pi)
         hi = np.minimum(self.joint_upper, math.pi)
         joints = gen.uniform(lo, hi)
@@ -500,7 +506,12 @@ class Model:
         """
         q = self.check_configuration(q)
         step = as_scalar(dt, "dt")
-        return np.asarray(pin.integrate(self.pin_model, q, self.velocity(zeta) * step))
+        out = np.asarray(pin.integrate(self.pin_model, q, self.velocity(zeta) * step))
+        if not np.isfinite(out).all():  # finite zeta and dt whose product overflows
+            raise NonFiniteError(f"integrate: zeta * dt overflows (max |zeta| "
+                                 f"{np.abs(np.asarray(zeta, dtype=np.float64)).max():.3g}, "
+                                 f"dt {step:g}): the configuration is not finite")
+        return out
 
     # --- kinematics --------------------------------------------------------------------
 

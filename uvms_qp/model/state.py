@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..errors import UnknownNameError
+from ..errors import UnknownFrameError, UnknownNameError
 from .vehicle import fossen_jacobian_values, spatial_eta_and_rotation
 
 if TYPE_CHECKING:
@@ -158,7 +158,10 @@ class State:
         Raises:
             UnknownFrameError: unknown frame (the message lists the known frames).
         """
-        T = self._poses.get(frame)
+        try:
+            T = self._poses.get(frame)
+        except TypeError:  # an unhashable frame name
+            raise UnknownFrameError(frame, self.model.frames) from None
         if T is None:
             model = self.model
             fid = model.frame_id(frame)
@@ -207,7 +210,12 @@ class State:
             UnknownFrameError: unknown frame.
             UnknownNameError: unknown ``rows`` or ``axes``.
         """
-        J = self._jacobians.get((frame, axes))
+        try:
+            J = self._jacobians.get((frame, axes))
+        except TypeError:  # an unhashable frame name or axes
+            J = None
+            if not isinstance(frame, str):
+                raise UnknownFrameError(frame, self.model.frames) from None
         if J is None:
             J = self._frame_jacobian(frame, axes)
         if rows == "twist":
@@ -243,7 +251,10 @@ class State:
         Returns:
             ``(6 or 3, model.n_joints)`` read-only array.
         """
-        Ja = self._arm.get(frame)
+        try:
+            Ja = self._arm.get(frame)
+        except TypeError:  # an unhashable frame name
+            raise UnknownFrameError(frame, self.model.frames) from None
         if Ja is None:
             Ja = self._arm_jacobian(frame)
         if rows == "twist":
