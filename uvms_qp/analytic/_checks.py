@@ -6,6 +6,7 @@ NaN is reported with the argument's name and the library's own error types.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -15,6 +16,31 @@ from .._validation import as_matrix, as_scalar, as_vector
 from ..errors import InputError, ShapeError
 
 FloatArray = NDArray[np.float64]
+
+
+def items(value: Any, name: str) -> list[Any]:
+    """Return the elements of a list/tuple/array argument as a list.
+
+    Raises:
+        InputError: ``value`` is not a sequence (e.g. None, a number or a string).
+    """
+    if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray):
+        raise InputError(f"{name}: expected a list, got {type(value).__name__}")
+    return list(value)
+
+
+def indices(value: Any, name: str) -> list[int]:
+    """Return a list of integer indices.
+
+    Raises:
+        InputError: not a sequence, or an element that is not an integer.
+    """
+    out = []
+    for k, item in enumerate(items(value, name)):
+        if isinstance(item, bool) or not isinstance(item, int | np.integer):
+            raise InputError(f"{name}[{k}]: expected an integer index, got {item!r}")
+        out.append(int(item))
+    return out
 
 
 def jacobian(value: Any, name: str, cols: int | None = None) -> FloatArray:

@@ -27,7 +27,7 @@ import numpy as np
 
 from .._validation import as_matrix, as_vector
 from ..errors import InputError, ShapeError
-from ._checks import FloatArray, jacobian
+from ._checks import FloatArray, indices, jacobian
 from .screws import planar_chain_points, planar_chain_screws, planar_rows, screw_transform
 
 PPPS_NAMES = ("px", "py", "pz", "rx", "ry", "rz")
@@ -100,7 +100,7 @@ def davies_solve(
     """
     N = jacobian(N, "N")
     r, c = N.shape
-    idx = [int(i) for i in primary]
+    idx = indices(primary, "primary")
     if len(set(idx)) != len(idx) or any(i < 0 or i >= c for i in idx):
         raise InputError(f"primary: expected distinct indices in [0, {c}), got {list(primary)}")
     rates = as_vector(primary_rates, "primary_rates", len(idx))

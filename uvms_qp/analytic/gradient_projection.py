@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validation import as_scalar, as_vector
 from ..errors import InputError, ShapeError
-from ._checks import FloatArray, jacobian, metric_root, rate
+from ._checks import FloatArray, items, jacobian, metric_root, rate
 from .inverses import _pinv
 
 
@@ -124,6 +124,8 @@ def multi_objective_gradient_projection(
     """
     J = jacobian(J, "J")
     n = J.shape[1]
+    gradients = items(gradients, "gradients")
+    alphas = items(alphas, "alphas")
     if len(gradients) != len(alphas):
         raise InputError(
             f"gradients and alphas: expected the same count, got {len(gradients)} and {len(alphas)}"

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
-from ._checks import FloatArray, gain_matrix, jacobian, metric_root, nonneg, rate
+from ._checks import FloatArray, gain_matrix, items, jacobian, metric_root, nonneg, rate
 from .inverses import _damped, _pinv
 
 
@@ -106,6 +106,7 @@ def recursive_task_priority(
         InputError: no task given.
         ShapeError: Jacobians with different column counts or wrong rate lengths.
     """
+    tasks = items(tasks, "tasks")
     if len(tasks) == 0:
         raise InputError("tasks: expected at least one (J, x) pair")
     damping = nonneg(damping, "damping")
@@ -113,7 +114,7 @@ def recursive_task_priority(
     checked: list[tuple[FloatArray, FloatArray]] = []
     n = -1
     for k, task in enumerate(tasks):
-        if len(task) != 2:
+        if isinstance(task, str | bytes) or not isinstance(task, Sequence) or len(task) != 2:
             raise InputError(f"tasks[{k}]: expected a (J, x) pair")
         J = jacobian(task[0], f"tasks[{k}].J")
         if n < 0:

@@ -61,6 +61,9 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         raise ConfigError(f"cannot read scenario file {file}: {exc.strerror or exc}") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{file}: malformed TOML: {exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{file}: not UTF-8 text (byte {exc.start}): TOML files are UTF-8"
+                          ) from exc
 
 
 def join(path: str, key: str | int) -> str:

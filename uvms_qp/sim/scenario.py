@@ -280,6 +280,9 @@ def resolve_scenario(source: str | Path) -> Path:
     Raises:
         ConfigError: neither an existing file nor a bundled name (bundled names are listed).
     """
+    if not isinstance(source, str | Path):
+        raise ConfigError(f"scenario: expected a file path or a bundled scenario name, "
+                          f"got {type(source).__name__}")
     path = Path(source)
     if path.is_file():
         return path
