@@ -502,12 +502,15 @@ class Model:
             dt: Duration [s] (may be negative).
 
         Raises:
-            ShapeError, NonFiniteError: bad ``q``, ``zeta`` or ``dt``.
+            ShapeError, NonFiniteError: bad ``q``, ``zeta`` or ``dt``, or a ``zeta * dt`` that
+                overflows (finite inputs giving a non-finite configuration).
         """
         q = self.check_configuration(q)
         step = as_scalar(dt, "dt")
         out = np.asarray(pin.integrate(self.pin_model, q, self.velocity(zeta) * step))
-        if not np.isfinite(out).all():  # finite zeta and dt whose product overflows
+        # finite zeta and dt whose product overflows (the sum is the cheap test; an overflowing
+        # sum of finite entries is re-checked entry by entry)
+        if not math.isfinite(sum(out.tolist())) and not np.isfinite(out).all():
             raise NonFiniteError(f"integrate: zeta * dt overflows (max |zeta| "
                                  f"{np.abs(np.asarray(zeta, dtype=np.float64)).max():.3g}, "
                                  f"dt {step:g}): the configuration is not finite")
