@@ -46,7 +46,7 @@ from .hqp.inplace import InPlaceDaqp
 from .hqp.problem import Block, Problem
 from .hqp.result import StackedResult
 from .hqp.rows import Rows
-from .safety.fallback import PRIMARY, SafeSolver, default_alternate
+from .safety.fallback import PRIMARY, ZERO, SafeSolver, default_alternate
 from .stack import Stack
 from .tasks.task import Task
 
@@ -61,6 +61,28 @@ SCHEMES: tuple[str, ...] = ("hqp", "weighted", "nullspace")
 #: ``max(NULLSPACE_ATOL, NULLSPACE_RCOND * |weighted rows of the level|_F)`` are dropped.
 NULLSPACE_RCOND = 1e-10
 NULLSPACE_ATOL = 0.0
+
+
+def _check_arguments(model: Any, solver: Any, options: Any, strict: Any) -> None:
+    """Reject constructor arguments of the wrong type, naming the argument.
+
+    Raises:
+        InputError: ``model`` is not a :class:`~uvms_qp.model.Model`, ``solver`` not a string,
+            ``options`` neither None nor a dict, or ``strict`` not a bool.
+    """
+    from .model import Model
+
+    if not isinstance(model, Model):
+        hint = (f"; load a bundled model with uvms_qp.load_model({model!r})"
+                if isinstance(model, str) else "")
+        raise InputError(f"model: expected a Model, got {type(model).__name__}{hint}")
+    if not isinstance(solver, str):
+        raise InputError(f"solver: expected a solver name (str), got {type(solver).__name__}")
+    if options is not None and not isinstance(options, dict):
+        raise InputError(
+            f"options: expected a dict of back-end options or None, got {type(options).__name__}")
+    if not isinstance(strict, bool | np.bool_):
+        raise InputError(f"strict: expected True or False, got {strict!r}")
 
 
 def not_a_state(value: Any) -> InputError:
@@ -286,6 +308,7 @@ class Controller:
         strict: bool = False,
         deadline: float | None = None,
     ) -> None:
+        _check_arguments(model, solver, options, strict)
         if not isinstance(stack, Stack):
             raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
         if scheme not in SCHEMES:
@@ -307,7 +330,7 @@ class Controller:
             # as soft weights of one DAQP level the priority weights would span more orders of
             # magnitude than its soft-row regularisation resolves; DAQP as a plain QP is exact
             solver = "cascade:daqp"
-        self.strict = bool(strict)
+        self.strict = bool(strict)  # a bool (or NumPy bool) by _check_arguments
         if scheme == "nullspace":
             self._safe: SafeSolver | None = None
             self._solver = HierarchySolver(solver, weights=self.metric, options=options)
@@ -587,10 +610,13 @@ class Controller:
             if inplace is not None:
                 return self._inplace_result(inplace, t, start)
         A, lo, hi = self._A, self._lo, self._hi
-        # lower sides hold finite values and -inf only, upper sides finite and +inf only, so
-        # their sums are NaN exactly when a NaN is present
-        if not math.isfinite(A.sum()) or math.isnan(lo.sum()) or math.isnan(hi.sum()):
-            self._raise_non_finite()
+        # legitimate lower sides hold finite values and -inf only, upper sides finite values and
+        # +inf only: a NaN, a +inf lower side or a -inf upper side (e.g. a gain times an error
+        # that overflowed) makes the sum NaN, +inf (lower) or -inf (upper); O(1) NumPy calls
+        s_a, s_lo, s_hi = A.sum(), lo.sum(), hi.sum()
+        if not math.isfinite(s_a) or s_lo != s_lo or s_lo == math.inf or (
+                s_hi != s_hi or s_hi == -math.inf):
+            self._raise_non_finite()  # returns when only the sum overflowed (finite entries)
         if self._row_slots:
             np.equal(self._Hlo, self._Hhi, out=self._hard_eq)
         np.equal(lo, hi, out=self._row_is_equality)
@@ -608,9 +634,16 @@ class Controller:
             t0 = time.perf_counter()
             raw = nullspace_solve(problem, NULLSPACE_RCOND, NULLSPACE_ATOL)
             zeta = np.minimum(np.maximum(raw, self._lower), self._upper)
+            status, message = Status.OPTIMAL, ""
+            if not np.isfinite(zeta).all():
+                # finite rows whose closed-form solution overflows: never command it
+                zeta, stage, status = self._zero_command(), ZERO, Status.BACKEND_ERROR
+                message = "zero: the closed-form solution is not finite"
+                attempts = ("primary: the closed-form solution is not finite",)
             saturated = bool(np.any(zeta != raw))
-            result = evaluate(problem, zeta, "nullspace", Status.OPTIMAL,
-                              "saturated into the hard box" if saturated else "",
+            if saturated and not message:
+                message = "saturated into the hard box"
+            result = evaluate(problem, zeta, "nullspace", status, message,
                               level_tol=self._solver.level_tol, hard_tol=self._solver.hard_tol,
                               solve_time=time.perf_counter() - t0)
         else:
@@ -618,6 +651,9 @@ class Controller:
             result, zeta, stage = safe.result, safe.x, safe.stage
             clipped, missed, attempts = safe.clipped, safe.deadline_missed, safe.attempts
             saturated = safe.clip_flagged
+            if not np.isfinite(zeta).all():  # pragma: no cover - the ladder verifies finiteness
+                raise NonFiniteError(f"{self.solver_name}: the fallback ladder returned a "
+                                     "non-finite zeta")
         y = A @ zeta
         viol = np.maximum(lo - y, 0.0)
         viol += np.maximum(y - hi, 0.0)
@@ -662,12 +698,26 @@ class Controller:
             _errors=tuple(task._last_error for task in self._tasks),
             _hard_rows_violation=result.hard_violation, _level_sizes=self._level_sizes)
 
+    def _zero_command(self) -> FloatArray:
+        """The zero command saturated into this tick's hard box (finite: the box is not empty)."""
+        return np.minimum(np.maximum(np.zeros(self.nv), self._lower), self._upper)
+
     def _raise_non_finite(self) -> None:
+        """Raise NonFiniteError naming the first task with a non-finite entry.
+
+        Non-finite: NaN or inf in its rows ``A``, NaN or ``+inf`` in a lower side, NaN or
+        ``-inf`` in an upper side. Returns normally when every entry is legitimate (the sums
+        that triggered the check overflowed on large finite values).
+        """
+        A, lo, hi = self._A, self._lo, self._hi
         for task, sl in zip(self._tasks, self._task_slices, strict=True):
-            if not (np.isfinite(self._A[sl]).all() and not np.isnan(self._lo[sl]).any()
-                    and not np.isnan(self._hi[sl]).any()):
+            if not np.isfinite(A[sl]).all():
                 raise NonFiniteError(f"task {task.name!r} produced non-finite rows")
-        raise NonFiniteError("non-finite rows")  # pragma: no cover
+            if np.isnan(lo[sl]).any() or np.isposinf(lo[sl]).any() or np.isnan(hi[sl]).any() or (
+                    np.isneginf(hi[sl]).any()):
+                raise NonFiniteError(
+                    f"task {task.name!r} produced a non-finite target side (NaN, a +inf lower "
+                    "or a -inf upper side; e.g. a gain times an error that overflowed)")
 
     def __repr__(self) -> str:
         return (f"Controller({self.model.name!r}, {len(self.stack.levels)} levels, "
