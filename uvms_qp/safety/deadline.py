@@ -68,7 +68,7 @@ _TIME_LIMITS: dict[str, str] = {
     "cascade:clarabel": "time_limit",
 }
 _ITERATION_LIMITS: dict[str, tuple[str, int]] = {
-    "cascade:proxqp": ("max_iter", 200),
+    "cascade:proxqp": ("max_iter", 50),
     "cascade:piqp": ("max_iter", 250),
 }
 

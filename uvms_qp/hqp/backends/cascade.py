@@ -142,6 +142,7 @@ class CascadeBackend:
         #: QPs answered by the exact active-set rescue since construction (diagnostics)
         self.rescued = 0
         self._stopped = False  # a QP raised TimeoutError in this solve (deadline guard)
+        self._capped = False  # the last QP stopped at its iteration cap
         self.settings = {**spec.settings, **opts}
         if spec.qp_name == "highs":
             _mute_highs_banner()
@@ -178,6 +179,7 @@ class CascadeBackend:
             return None, none
         except Exception:  # a back-end crash is a failed level, reported truthfully
             return None, none
+        self._capped = not sol.found and _hit_iteration_cap(sol)
         z = sol.x
         if z is None or not np.all(np.isfinite(z)):
             return None, none
@@ -371,6 +373,8 @@ class CascadeBackend:
                 z, active = self._qp(Pr, qr, rows, lb, ub, extra)
             if z is not None and self._feasible(problem, xp + Z @ z[:p]):
                 return z, active
+            if z is None and self._capped:
+                break  # other settings would spend the same capped effort: go to the rescue
         # rescue from y = 0 (the previous answer), else from a vertex of the hard set, with the
         # smallest slacks that satisfy the level's own rows
         for y0 in (np.zeros(p), None):
@@ -402,6 +406,8 @@ class CascadeBackend:
             z, _ = self._qp(P, q, rows, lb, ub, extra)
             if z is not None and self._feasible(problem, xp + Z @ z):
                 return z
+            if z is None and self._capped:
+                break  # other settings would spend the same capped effort: go to the rescue
         z, _ = self._rescue(P, q, rows, lb, ub, np.zeros(p))
         if z is not None and self._feasible(problem, xp + Z @ z):
             return z
@@ -477,6 +483,17 @@ def _polish_active_set(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Fl
     f = 0.5 * z @ P @ z + q @ z
     fp = 0.5 * zp @ P @ zp + q @ zp
     return zp if fp <= f + 1e-12 * (1.0 + abs(f)) else z
+
+
+def _hit_iteration_cap(sol: Any) -> bool:
+    """True when the back-end reports that it stopped at its iteration cap.
+
+    ProxQP (``PROXQP_MAX_ITER_REACHED``) and PIQP (``PIQP_MAX_ITER_REACHED``) say so in their
+    status; such a QP is badly scaled for the back-end (e.g. a target 1e300 m away), and each
+    retry with other tolerances would spend the same capped effort again.
+    """
+    info = (sol.extras or {}).get("info")
+    return "MAX_ITER" in str(getattr(info, "status", "")).upper()
 
 
 def _closest_feasible_is_optimal(sol: Any, G: FloatArray | None, h: FloatArray | None,
