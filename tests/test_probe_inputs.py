@@ -70,8 +70,8 @@ def test_bad_rows_error_names_the_rows() -> None:
 def test_rows_of_lists_solve_like_arrays(solver: str) -> None:
     """A ``Rows`` holding lists is converted, and solves to the same answer as arrays."""
     target = [0.25, -0.5]
-    listed = solve_hierarchy([[Rows([[1.0, 0.0], [0.0, 1.0]], target, target)]], *BOX,
-                             solver=solver)
+    listed = HierarchySolver(solver).solve([[Rows([[1.0, 0.0], [0.0, 1.0]], target, target)]],
+                                           *BOX)
     assert listed.ok
     np.testing.assert_allclose(listed.x, target, atol=1e-7)
 
@@ -85,7 +85,7 @@ def test_weighted_rows_are_still_used(solver: str) -> None:
     """
     A = np.array([[1.0, 0.0], [1.0, 0.0]])
     rows = Rows(A, np.array([1.0, 0.0]), np.array([1.0, 0.0]), np.array([4.0, 1.0]))
-    result = solve_hierarchy([[rows]], *BOX, solver=solver)
+    result = HierarchySolver(solver).solve([[rows]], *BOX)
     assert result.ok
     assert result.x[0] == pytest.approx(0.8, abs=1e-6)
 
