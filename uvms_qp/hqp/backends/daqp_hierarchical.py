@@ -147,7 +147,10 @@ class DaqpHierarchicalBackend:
         """
         n, head = ws.n, ws.head
         hard_eq = (lo[n:head] == hi[n:head]).tobytes() if ws.mh else b""
-        key = (ws.key, hard_eq, W.tobytes())
+        # the workspace itself, not its shape: DAQP reads this workspace's arrays, and a call
+        # that failed after a new workspace of the same shape was made must not leave the model
+        # reading the old one
+        key = (ws, hard_eq, W.tobytes())
         self._w = w
         if key != self._key:
             model = HierarchyModel(ws, W, lo[n:head] == hi[n:head], self._daqp_settings)
