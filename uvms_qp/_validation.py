@@ -40,7 +40,8 @@ def _check_finite(array: FloatArray, name: str, allow_inf: bool) -> None:
 
 
 def as_vector(
-    value: Any, name: str, size: int | None = None, *, allow_inf: bool = False
+    value: Any, name: str, size: int | None = None, *, allow_inf: bool = False,
+    positive: bool = False,
 ) -> FloatArray:
     """Return ``value`` as a finite 1-D float64 array, optionally of a given length.
 
@@ -49,10 +50,12 @@ def as_vector(
         name: Argument name used in error messages.
         size: Required length, or None for any.
         allow_inf: Accept +/-inf (for bounds); NaN is always rejected.
+        positive: Require every entry > 0 (weights, metrics).
 
     Raises:
         ShapeError: wrong number of dimensions or wrong length.
         NonFiniteError: NaN (or inf when not allowed).
+        InputError: an entry <= 0 with ``positive``.
     """
     array = _to_float_array(value, name)
     if array.ndim == 0:
@@ -62,6 +65,8 @@ def as_vector(
     if size is not None and array.shape[0] != size:
         raise ShapeError(f"{name}: expected length {size}, got {array.shape[0]}")
     _check_finite(array, name, allow_inf)
+    if positive and array.size and not array.min() > 0.0:
+        raise InputError(f"{name}: expected positive entries, got min {array.min():g}")
     return array
 
 

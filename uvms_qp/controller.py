@@ -321,9 +321,7 @@ class Controller:
         nv = int(model.nv)
         self.nv = nv
         self.metric = (np.ones(nv) if metric is None
-                       else as_vector(metric, "metric", nv))
-        if np.any(self.metric <= 0.0):
-            raise InputError(f"metric: expected positive weights, got min {self.metric.min():g}")
+                       else as_vector(metric, "metric", nv, positive=True))
         if scheme == "nullspace":
             solver = "nullspace"
         elif scheme == "weighted" and solver == "daqp":

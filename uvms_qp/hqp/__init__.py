@@ -160,12 +160,7 @@ class HierarchySolver:
                 src = b"?"
         W = self._metric
         if W is None or W.shape[0] != n or src != self._metric_src:
-            if raw is None:
-                W = np.ones(n)
-            else:
-                W = as_vector(raw, "weights", n)
-                if np.any(W <= 0.0):
-                    raise InputError(f"weights: expected a positive metric, got min {W.min():g}")
+            W = np.ones(n) if raw is None else as_vector(raw, "weights", n, positive=True)
             self._metric, self._metric_src = W, src
         return W
 

@@ -144,9 +144,7 @@ class InPlaceDaqp:
         if not isinstance(sizes, list | tuple) or not sizes:
             raise InputError(f"sizes: expected a non-empty list of row counts, got {sizes!r}")
         sizes = [_count(m, f"sizes[{k}]", 1) for k, m in enumerate(sizes)]
-        W = np.ones(n) if W is None else as_vector(W, "W", n)
-        if np.any(W <= 0.0):
-            raise InputError(f"W: expected positive weights, got min {W.min():g}")
+        W = np.ones(n) if W is None else as_vector(W, "W", n, positive=True)
         if settings is None:
             settings = {k: v for k, v in spec.settings.items() if k != "rho_ladder"}
         else:

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
-from .rows import Rows
+from .rows import Rows, pair_or_triple_arrays
 from .workspace import Workspace
 
 _Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]
@@ -47,12 +47,10 @@ def _item(item: Any) -> _Item | None:
                 type(w) is not np.ndarray or w.shape != lo.shape or w.dtype.kind != "f")):
             return None
     elif isinstance(item, tuple | list) and len(item) in (2, 3):
-        try:
-            A = np.asarray(item[0], dtype=np.float64)
-            lo = np.asarray(item[1], dtype=np.float64)
-            hi = lo if len(item) == 2 else np.asarray(item[2], dtype=np.float64)
-        except (TypeError, ValueError):
+        arrays = pair_or_triple_arrays(item)
+        if arrays is None:
             return None
+        A, lo, hi = arrays
         w = None
     else:
         return None

@@ -21,7 +21,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
-from .rows import Rows
+from .rows import Rows, pair_or_triple_arrays
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,12 +152,10 @@ def _fast_rows(item: tuple[Any, ...] | list[Any]) -> Rows | None:
     Only checks that pass for valid input run here (dtype, shapes, finiteness, ordering); any
     doubt falls back to :meth:`Rows.validated`, which produces the detailed error message.
     """
-    try:
-        A = np.asarray(item[0], dtype=np.float64)
-        lo = np.asarray(item[1], dtype=np.float64)
-        hi = lo if len(item) == 2 else np.asarray(item[2], dtype=np.float64)
-    except (TypeError, ValueError):
+    arrays = pair_or_triple_arrays(item)
+    if arrays is None:
         return None
+    A, lo, hi = arrays
     if A.ndim != 2 or lo.ndim != 1 or hi.ndim != 1:
         return None
     m = A.shape[0]
@@ -288,12 +286,7 @@ def normalize_problem(
     check_bounds_order(lo, hi, "bounds")
     if np.any(lo == np.inf) or np.any(hi == -np.inf):
         raise InputError("bounds: a lower bound is +inf or an upper bound is -inf")
-    if weights is None:
-        W = np.ones(n)
-    else:
-        W = as_vector(weights, "weights", n)
-        if np.any(W <= 0.0):
-            raise InputError(f"weights: expected a positive metric, got min {W.min():g}")
+    W = np.ones(n) if weights is None else as_vector(weights, "weights", n, positive=True)
     if hard_block.m == 0 and hard_block.A.shape[1] != n:
         hard_block = Block(np.zeros((0, n)), np.zeros(0), np.zeros(0), np.zeros(0),
                            np.zeros(0, dtype=bool))
