@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from uvms_qp.safety.soak import run_soak
+from uvms_qp.testing.soak import run_soak
 
 
 def main() -> int:

@@ -7,7 +7,7 @@ Claims of ``000_7b5f597fe4e36aa4.txt``, Sections 3 and 4.4, as numbers on the bu
 import numpy as np
 import pytest
 
-from uvms_qp.schemes.comparison import compare
+from uvms_qp.sim.comparison import compare
 
 RHO_BAR = 1.3
 

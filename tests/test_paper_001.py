@@ -8,7 +8,7 @@ Claims of ``001_0fa6eac0390842e0.txt``, Simulation Results, on the bundled scena
 import numpy as np
 import pytest
 
-from uvms_qp.schemes.comparison import compare
+from uvms_qp.sim.comparison import compare
 
 CURRENT = 0.78
 

@@ -8,7 +8,7 @@ See docs/papers/002_nenchev.md.
 import numpy as np
 import pytest
 
-from uvms_qp.schemes.comparison import compare
+from uvms_qp.sim.comparison import compare
 
 REACH = 2.0  # d3 + d5 [m]
 

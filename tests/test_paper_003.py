@@ -8,7 +8,7 @@ See docs/papers/003_wang.md (the fuzzy rule base is a reconstruction).
 import numpy as np
 import pytest
 
-from uvms_qp.schemes.comparison import compare
+from uvms_qp.sim.comparison import compare
 
 Q3_LIMIT = np.radians(110.0)
 

@@ -26,9 +26,9 @@ from uvms_qp.controller import Controller
 from uvms_qp.errors import BoundsError, InputError, NonFiniteError, ShapeError
 from uvms_qp.model import load_model
 from uvms_qp.safety import SafeSolver
-from uvms_qp.safety.faults import Fault, inject
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import EndEffectorTask, PostureTask, StationKeepingTask
+from uvms_qp.testing.faults import Fault, inject
 
 NAN, INF = math.nan, math.inf
 

@@ -4,7 +4,7 @@
   Euler step the joints are inside their limits to 1e-9 rad, and every command respects the
   rate bounds exactly (saturation is bit-exact).
 * 10^4 steps of the bundled demo with re-drawn targets and 1 % injected back-end faults
-  (``uvms_qp.safety.soak``): 0 unsafe outputs, 0 limit excursions, tracemalloc growth after the
+  (``uvms_qp.testing.soak``): 0 unsafe outputs, 0 limit excursions, tracemalloc growth after the
   warm-up <= 1 MiB. The 10^6-step run is ``benchmarks/soak.py``.
 """
 
@@ -17,9 +17,9 @@ from reliability_models import random_model
 from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
 from uvms_qp.controller import Controller
 from uvms_qp.model import load_model
-from uvms_qp.safety.soak import run_soak
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import EndEffectorTask, PostureTask
+from uvms_qp.testing.soak import run_soak
 
 STEPS = 5000
 DT = 0.05

@@ -15,8 +15,8 @@ import pytest
 from uvms_qp.controller import Controller
 from uvms_qp.errors import NoSolutionFound
 from uvms_qp.safety import DEGRADED_STAGES
-from uvms_qp.safety.faults import Fault, inject
 from uvms_qp.sim.scenario import load_scenario
+from uvms_qp.testing.faults import Fault, inject
 
 K = 12
 STEPS = 30

@@ -1,6 +1,6 @@
 """The fallback ladder on plain problems: every fault gives a safe command and a named stage.
 
-Faults are injected into the back-end (uvms_qp.safety.faults) so the whole path is exercised:
+Faults are injected into the back-end (uvms_qp.testing.faults) so the whole path is exercised:
 back-end -> evaluation -> verification -> ladder -> saturation.
 """
 
@@ -25,7 +25,7 @@ from uvms_qp.safety import (
     verify_point,
     verify_solution,
 )
-from uvms_qp.safety.faults import Fault, inject
+from uvms_qp.testing.faults import Fault, inject
 
 BOX = 0.3
 

@@ -15,7 +15,7 @@ from uvms_qp.errors import ConfigError, InputError, ShapeError, UnknownSolverErr
 from uvms_qp.hqp import solve_hierarchy
 from uvms_qp.model import load_model
 from uvms_qp.schemes import WangPseudoinverse, build_scheme
-from uvms_qp.schemes.comparison import BOUNDS_NOTE, Comparison, SchemeRun
+from uvms_qp.sim.comparison import BOUNDS_NOTE, Comparison, SchemeRun
 from uvms_qp.sim.scenario import load_scenario
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import PostureTask

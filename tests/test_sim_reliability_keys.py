@@ -9,9 +9,9 @@ import pytest
 from scenario_text import bluerov_scenario
 
 from uvms_qp.errors import ConfigError, InputError, NoSolutionFound
-from uvms_qp.safety.faults import Fault, inject
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import Scenario, scenario_from_dict
+from uvms_qp.testing.faults import Fault, inject
 
 BASE = bluerov_scenario("duration = 0.5", """
 [[levels]]

@@ -1,7 +1,7 @@
 """results.json records the fallback stage of every step, the clipped amount and deadline misses.
 
 The demo controller runs clean (every step ``primary``), then with faults injected into its
-back-ends (:mod:`uvms_qp.safety.faults`): the recorded stages must be those the controller
+back-ends (:mod:`uvms_qp.testing.faults`): the recorded stages must be those the controller
 reported, step by step, and the summary counts must add up to the number of steps.
 """
 
@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 
 from uvms_qp.safety import DEGRADED_STAGES, STAGES
-from uvms_qp.safety.faults import Fault, inject
 from uvms_qp.schemes import build_scheme
 from uvms_qp.sim.results import results_dict, write_results
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario
+from uvms_qp.testing.faults import Fault, inject
 
 STEPS = 20  # 1 s of the demo at dt = 0.05 s
 DURATION = 1.0

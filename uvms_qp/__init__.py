@@ -31,7 +31,7 @@ __version__ = "0.1.0"
 
 # public name -> module that defines it (relative to this package)
 _LAZY: dict[str, str] = {
-    "Rows": ".hqp.rows",
+    "Rows": ".rows",
     "solve_hierarchy": ".hqp",
     "HierarchyResult": ".hqp",
     "Status": ".hqp",

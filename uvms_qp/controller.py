@@ -45,7 +45,7 @@ from .hqp.evaluate import evaluate
 from .hqp.inplace import InPlaceDaqp
 from .hqp.problem import Block, Problem
 from .hqp.result import StackedResult
-from .hqp.rows import Rows
+from .rows import Rows
 from .safety.fallback import PRIMARY, ZERO, SafeSolver, default_alternate
 from .stack import Stack
 from .tasks.task import Task
@@ -424,7 +424,7 @@ class Controller:
         Uses the primary back-end's settings and tolerances (deadline limits included); None
         for every other scheme and solver (their steps take the general path). The path is
         the primary back-end's own: it is used only while that back-end is in place (a
-        wrapped or replaced back-end, e.g. :func:`uvms_qp.safety.faults.inject`, is called
+        wrapped or replaced back-end, e.g. :func:`uvms_qp.testing.faults.inject`, is called
         through the general path).
         """
         backend = getattr(self._solver, "_backend", None)

@@ -313,7 +313,7 @@ def _box_violation(problem: BenchProblem, x: FloatArray) -> float:
 
 
 def _raw_reference_rows(problem: BenchProblem) -> list[Any]:
-    from ..hqp.rows import Rows
+    from ..rows import Rows
 
     out = []
     for level in problem.levels or []:
@@ -421,7 +421,7 @@ class WeightedRunner(Runner):
         return HierarchySolver(WEIGHTED_BACKEND)
 
     def _raw_inputs(self, problem: BenchProblem) -> tuple[list[Any], Any, Any]:
-        from ..hqp.rows import Rows
+        from ..rows import Rows
 
         rows = _raw_reference_rows(problem)
         p = len(rows)

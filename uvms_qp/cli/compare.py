@@ -52,8 +52,8 @@ def _print_table(comparison: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the comparison and write results, table and figures into ``args.out``."""
-    from ..schemes.comparison import compare
-    from ..schemes.figures import plot_comparison
+    from ..sim.comparison import compare
+    from ..sim.comparison_figures import plot_comparison
     from ..sim.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)

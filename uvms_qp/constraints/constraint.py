@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
-from ..hqp.rows import Rows
+from ..rows import Rows
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State

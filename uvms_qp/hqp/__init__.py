@@ -26,6 +26,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
+from ..rows import Rows
 from .backends import BackendOutput
 from .evaluate import evaluate, evaluate_stacked
 from .inplace import check_settings
@@ -33,7 +34,6 @@ from .loading import load_levels
 from .problem import Problem, normalize_problem
 from .registry import SOLVERS, SolverSpec, available_solvers, get_spec
 from .result import HierarchyResult, Status
-from .rows import Rows
 
 __all__ = [
     "SOLVERS",

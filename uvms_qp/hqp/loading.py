@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
-from .rows import Rows, pair_or_triple_arrays
+from ..rows import Rows, pair_or_triple_arrays
 from .workspace import Workspace
 
 _Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]

@@ -21,7 +21,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
-from .rows import Rows, pair_or_triple_arrays
+from ..rows import Rows, pair_or_triple_arrays
 
 
 @dataclass(frozen=True, eq=False)

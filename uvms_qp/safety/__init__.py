@@ -5,7 +5,6 @@
   decayed previous command, zero, hold zero) in :class:`SafeSolver`;
 * :mod:`~uvms_qp.safety.saturation`: the final clip to the hard box, with the amount reported;
 * :mod:`~uvms_qp.safety.deadline`: the per-step wall-clock budget and back-end limits;
-* :mod:`~uvms_qp.safety.faults`: fault injection for tests.
 
 See ``docs/reliability.md`` for the contract of a control step.
 """

@@ -4,7 +4,7 @@ A task is built from keyword arguments (so a scenario loader can build it from a
 model once (:meth:`Task.bind` checks frames, joints and dimensions and fixes the row count), then
 evaluated every control tick on a :class:`~uvms_qp.model.State`:
 
-* :meth:`Task.rows` returns a fresh :class:`~uvms_qp.hqp.rows.Rows` (for users and tests);
+* :meth:`Task.rows` returns a fresh :class:`~uvms_qp.rows.Rows` (for users and tests);
 * :meth:`Task.fill` writes the same rows into caller-owned buffers (the controller's hot path, no
   allocation of the row block).
 
@@ -26,7 +26,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ..hqp.rows import Rows
+from ..rows import Rows
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State

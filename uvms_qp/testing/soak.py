@@ -11,7 +11,7 @@ Every ``retarget`` steps the tool target is re-drawn (uniform in a 2 m box aroun
 so part of the targets are beyond reach) and the payload force re-drawn; every ``restart`` steps
 the state is reset to the scenario's initial configuration and the target sequence restarts from
 the same seed, so every cycle repeats the same motion. Faults are injected into the primary
-back-end at random (:class:`~uvms_qp.safety.faults.RandomFaults`, their own random stream, so
+back-end at random (:class:`~uvms_qp.testing.faults.RandomFaults`, their own random stream, so
 they differ from cycle to cycle). Memory is traced with :mod:`tracemalloc` after a warm-up;
 latency drift compares the median step time of the first cycle after the warm-up with that of
 the last cycle (same motion, fault-free steps only).
@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..controller import Controller
+from ..sim.scenario import load_scenario
 from .faults import Fault, inject_random
 
 
@@ -114,9 +116,6 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
         sleep: Sleep of the injected solve-time spikes [s].
         progress: Print a line every 10 % of the run.
     """
-    from ..controller import Controller
-    from ..sim.scenario import load_scenario
-
     fault_rng = np.random.default_rng(seed + 1)
     rng = np.random.default_rng(seed)
     scenario = load_scenario("bluerov2_demo")

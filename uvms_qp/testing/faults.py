@@ -21,7 +21,7 @@ from ..errors import SolverError
 from ..hqp import HierarchySolver, Status
 from ..hqp.backends import BackendOutput
 from ..hqp.problem import Problem
-from .fallback import reset_backend
+from ..safety.fallback import reset_backend
 
 
 class Fault(StrEnum):

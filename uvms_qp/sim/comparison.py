@@ -34,8 +34,8 @@ from .._validation import FloatArray
 from ..errors import ConfigError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..sim.runner import SimulationResult
-    from ..sim.scenario import Scenario
+    from .runner import SimulationResult
+    from .scenario import Scenario
 
 #: Rows of the comparison table: (metric key, unit, format).
 TABLE_METRICS: tuple[tuple[str, str], ...] = (
@@ -198,7 +198,7 @@ class Comparison:
 
     def write(self, out_dir: str | Path) -> list[Path]:
         """Write every run's ``results.json`` and diagnostics, and the comparison table."""
-        from ..sim.results import write_results
+        from .results import write_results
 
         directory = Path(out_dir)
         directory.mkdir(parents=True, exist_ok=True)
@@ -302,9 +302,9 @@ def compare(
     Raises:
         ConfigError: invalid scenario, or a scheme name that is unknown or not in the scenario.
     """
-    from ..sim.runner import simulate
-    from ..sim.scenario import Scenario, load_scenario
-    from . import build_scheme
+    from ..schemes import build_scheme
+    from .runner import simulate
+    from .scenario import Scenario, load_scenario
 
     base = source if isinstance(source, Scenario) else load_scenario(source)
     names = list(base.schemes)

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray, as_matrix, as_vector, check_bounds_order
-from ..errors import InputError
+from ._validation import FloatArray, as_matrix, as_vector, check_bounds_order
+from .errors import InputError
 
 
 @dataclass(frozen=True, eq=False)

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..sim._figures import output_dir, pyplot, save
+from ._figures import output_dir, pyplot, save
 
 if TYPE_CHECKING:  # pragma: no cover
     from .comparison import Comparison
