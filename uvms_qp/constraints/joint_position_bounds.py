@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
-from ..tasks._common import check_joint_list, compact_index, joint_indices
+from ..model.selection import check_joint_list, compact_index, joint_indices
 from .constraint import Constraint
 
 if TYPE_CHECKING:  # pragma: no cover

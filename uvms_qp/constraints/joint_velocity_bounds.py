@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import as_scalar, as_vector
 from ..errors import InputError
-from ..tasks._common import check_joint_list, joint_indices
+from ..model.selection import check_joint_list, joint_indices
 from .constraint import SymmetricRateBox
 
 if TYPE_CHECKING:  # pragma: no cover

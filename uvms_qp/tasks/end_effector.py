@@ -9,13 +9,13 @@ import pinocchio as pin
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError, ShapeError
+from ..model.selection import compact_index
 from ._common import (
     TWIST_AXES,
     as_point,
     as_rotation,
     check_frame,
     check_planar_point,
-    compact_index,
     parse_axes,
     pose_units,
 )

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ._common import check_joint_list, compact_index, joint_indices
+from ..model.selection import check_joint_list, compact_index, joint_indices
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover

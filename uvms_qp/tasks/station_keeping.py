@@ -9,11 +9,11 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
+from ..model.selection import compact_index
 from ._common import (
     _TWO_PI,
     ANGLE_AXES,
     EtaRows,
-    compact_index,
     eta_axes,
     parse_axes,
     pose_units,

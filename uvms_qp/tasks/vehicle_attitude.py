@@ -9,10 +9,10 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
+from ..model.selection import compact_index
 from ._common import (
     _TWO_PI,
     EtaRows,
-    compact_index,
     eta_axes,
     parse_axes,
     vehicle_pose_jacobian,
