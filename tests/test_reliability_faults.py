@@ -39,14 +39,15 @@ def reference():
 
 
 def replay(qs, fault, *, start=K, count=1, armed=False, everything=False, strict=False,
-           deadline=None, sleep=0.05, times=None):
+           deadline=None, sleep=0.05, times=None, at="backend"):
     """Step a fresh demo controller along ``qs``; from step ``start`` the next ``count`` back-end
     calls fail (or, with ``armed``, every call during steps start..start+count-1 fails).
-    ``everything`` faults the alternate back-end as well."""
+    ``everything`` faults the alternate back-end as well; ``at="binding"`` faults DAQP's C
+    binding below the back-end instead of the back-end object."""
     sc = load_scenario("bluerov2_demo")
     ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric, strict=strict,
                       deadline=deadline)
-    wrappers = [inject(ctrl.safe.primary, fault, sleep=sleep)]
+    wrappers = [inject(ctrl, fault, sleep=sleep, at=at)]
     if everything:
         wrappers.append(inject(ctrl.safe.alternate, fault, sleep=sleep))
     out = []
@@ -66,7 +67,10 @@ def assert_safe(res):
     assert np.all(res.zeta >= res.lower) and np.all(res.zeta <= res.upper)
 
 
-@pytest.mark.parametrize("fault", [f for f in Fault if f is not Fault.SLEEP])
+DETECTABLE = [f for f in Fault if f not in (Fault.SLEEP, Fault.FEASIBLE_WRONG)]
+
+
+@pytest.mark.parametrize("fault", DETECTABLE)
 def test_one_failure_is_caught_and_leaves_no_trace(reference, fault):
     qs, zetas = reference
     results = replay(qs, fault)
@@ -80,6 +84,22 @@ def test_one_failure_is_caught_and_leaves_no_trace(reference, fault):
             assert res.stage == "primary"
         # the cold retry solves the same problem: same command; later steps unchanged
         assert np.max(np.abs(res.zeta - zetas[k])) <= 1e-7, (k, res.summary())
+
+
+@pytest.mark.parametrize("fault", DETECTABLE)
+def test_faults_below_the_default_back_end_are_caught(reference, fault):
+    """The default path (DAQP) faulted at its C binding, below the back-end object: every
+    step safe and truthful, and once the binding behaves the commands are the clean ones."""
+    qs, zetas = reference
+    results = replay(qs, fault, at="binding", count=3)
+    for k, res in enumerate(results):
+        assert_safe(res)
+        assert res.ok and res.bound_violation <= 1e-9, res.summary()
+        if k > K + 2:
+            assert res.stage == "primary"
+            assert np.max(np.abs(res.zeta - zetas[k])) <= 1e-7, (k, res.summary())
+    assert any(r.stage != "primary" or r.hierarchy.info.get("rho_soft") != 1e-8
+               for r in results[K:K + 3])
 
 
 @pytest.mark.parametrize("count, stages", [

@@ -98,7 +98,7 @@ def test_fused_error_task_rows_equal_the_compute_methods(make):
         np.testing.assert_array_equal(A, J)
         np.testing.assert_array_equal(lo, b)
         np.testing.assert_array_equal(hi, b)
-        np.testing.assert_array_equal(task._last_error, e)
+        np.testing.assert_array_equal(task.last_error, e)
 
 
 def test_the_kept_error_is_a_new_array_every_tick():
@@ -106,10 +106,10 @@ def test_the_kept_error_is_a_new_array_every_tick():
     task = EndEffectorTask(position=[0.5, 0.1, 0.2]).bind(BLUEROV)
     s1, s2 = _states(BLUEROV, n=2, seed=2)
     _fill(task, s1)
-    e1 = task._last_error
+    e1 = task.last_error
     kept = e1.copy()
     _fill(task, s2)
-    assert task._last_error is not e1
+    assert task.last_error is not e1
     np.testing.assert_array_equal(e1, kept)
 
 
@@ -158,7 +158,7 @@ def test_joint_limit_margin_rows_equal_the_band_formula(model):
         q = state.joints[idx]
         np.testing.assert_array_equal(lo, 2.0 * (lo_lim + 0.1 - q))
         np.testing.assert_array_equal(hi, 2.0 * (hi_lim - 0.1 - q))
-        assert task._last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()
+        assert task.last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()
     task.update(margin=0.2)
     state = _states(model, n=1, seed=6)[0]
     _, lo, hi = _fill(task, state)
@@ -272,7 +272,7 @@ def test_joint_limit_margin_on_a_joint_subset_and_outside_the_limits():
         q = state.joints[idx]
         np.testing.assert_array_equal(lo, 1.5 * (lo_lim + 0.1 - q))
         np.testing.assert_array_equal(hi, 1.5 * (hi_lim - 0.1 - q))
-        assert task._last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()
+        assert task.last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()
 
 
 def test_vehicle_attitude_set_point_update_reaches_the_fused_rows():

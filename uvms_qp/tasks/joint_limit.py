@@ -241,12 +241,12 @@ class JointLimitTask(Task):
             k = self.gain
             lower[:] = [(a - x) * k for a, x in zip(self._lo_m_list, q, strict=False)]
             upper[:] = [(b - x) * k for b, x in zip(self._hi_m_list, q, strict=False)]
-            self._last_error = np.array((min(min(map(sub, q, self._lo_list)),
+            self.last_error = np.array((min(min(map(sub, q, self._lo_list)),
                                              min(map(sub, self._hi_list, q))),))
             return
         H, g = _index_floats(q, self._per_joint)
         self.value = H
-        self._last_error = np.array((H,))
+        self.last_error = np.array((H,))
         if self.mode == "damping":
             lower[:] = 0.0
             upper[:] = 0.0

@@ -360,7 +360,7 @@ class ManipulabilityTask(Task):
         """
         w, g = self._value(state)
         self.value = w
-        self._last_error = np.array((w,))
+        self.last_error = np.array((w,))
         if self.mode == "floor":
             A[0] = self._zeros + g
             lower[0] = self.gain * (self.minimum - w)  # type: ignore[operator]

@@ -123,7 +123,7 @@ class PayloadMomentTask(Task):
         F = self.force
         M = (x * x + y * y) * F
         self.value = M
-        self._last_error = np.array((M,))
+        self.last_error = np.array((M,))
         a, b = 2.0 * F * x, 2.0 * F * y
         rx, ry = state.arm_jacobian(self.frame)[:2].tolist()
         g = [a * u + b * v for u, v in zip(rx, ry, strict=True)]

@@ -80,7 +80,7 @@ class Task(ABC):
         self.model: Model | None = None
         self.dim = 0
         self._row_weights: FloatArray = np.zeros(0)
-        self._last_error: FloatArray | None = None
+        self.last_error: FloatArray | None = None
 
     # ----------------------------------------------------------------------------------- binding
     def bind(self, model: Model) -> Task:
@@ -160,9 +160,9 @@ class Task(ABC):
 
         NaN before the first evaluation.
         """
-        if self._last_error is None:
+        if self.last_error is None:
             return float("nan")
-        return float(np.sqrt(self._last_error @ self._last_error))
+        return float(np.sqrt(self.last_error @ self.last_error))
 
     # ----------------------------------------------------------------------------------- run time
     def reset(self) -> None:  # noqa: B027 - optional hook
@@ -283,7 +283,7 @@ class ErrorTask(Task):
         ``e`` must be a fresh array: it is kept as the task's last error (a step result refers
         to it).
         """
-        self._last_error = e
+        self.last_error = e
         np.multiply(self.gain, e, out=lower)
         if ff is not None:
             lower += ff
@@ -305,7 +305,7 @@ class ErrorTask(Task):
             sides = [x + f for x, f in zip(sides, ff, strict=False)]
         lower[:] = sides
         upper[:] = lower
-        self._last_error = np.array(e)
+        self.last_error = np.array(e)
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

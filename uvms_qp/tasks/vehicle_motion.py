@@ -106,7 +106,7 @@ class VehicleMotionTask(Task):
         A[:] = self._A
         lower[:] = 0.0
         upper[:] = 0.0
-        self._last_error = None
+        self.last_error = None
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
