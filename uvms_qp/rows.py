@@ -90,19 +90,3 @@ class Rows:
         """Signed-free violation of each row at ``x``: distance of ``A x`` to ``[lower, upper]``."""
         y = self.A @ x
         return np.maximum(self.lower - y, 0.0) + np.maximum(y - self.upper, 0.0)
-
-
-def pair_or_triple_arrays(item: tuple[Any, ...] | list[Any]
-                          ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
-    """Float arrays ``(A, lo, hi)`` of an ``(A, b)`` pair or an ``(A, lo, hi)`` triple.
-
-    For a pair ``lo`` and ``hi`` are the same array ``b``. None when an entry does not convert
-    (the caller's full validation then names it); shapes and values are not checked here.
-    """
-    try:
-        A = np.asarray(item[0], dtype=np.float64)
-        lo = np.asarray(item[1], dtype=np.float64)
-        hi = lo if len(item) == 2 else np.asarray(item[2], dtype=np.float64)
-    except (TypeError, ValueError):
-        return None
-    return A, lo, hi

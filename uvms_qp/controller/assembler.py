@@ -10,7 +10,7 @@ import numpy as np
 from .._validation import FloatArray
 from ..errors import BoundsError, InputError, NonFiniteError
 from ..hqp import Problem
-from ..hqp.validate import sides_and_rows_ok
+from ..hqp.validate import finite_ok
 from ..rows import Rows
 from ..safety import SafeSolve
 from ..stack import Stack
@@ -115,7 +115,6 @@ class StackAssembler:
         Raises:
             InputError: ``state`` is not a State of this model (e.g. a configuration array).
             NonFiniteError: a task or constraint produced NaN/inf rows (the message names it).
-            BoundsError: the hard box is empty, or a task's lower side exceeds its upper side.
         """
         try:  # a try block costs nothing on the happy path
             if state.model is not self.model:
@@ -135,9 +134,19 @@ class StackAssembler:
         for c, HA, Hlo, Hhi in self._row_slots:
             c.fill_rows(state, self.dt, HA, Hlo, Hhi)
         problem = self.problem
-        if not sides_and_rows_ok(problem):
+        if not finite_ok(problem):
             self._diagnose(state)
         return problem
+
+    def check_box(self, state: State) -> None:
+        """Raise BoundsError naming the constraints when this tick's box is empty.
+
+        Asked after a step whose hard set was found empty (an empty box is no bad number: the
+        back-ends see it and report it, and this names the culprits).
+        """
+        lower, upper = self._box
+        if (lower > upper).any():
+            self._raise_empty_box(state)
 
     def _refresh_weights(self) -> None:
         problem = self.problem
@@ -185,11 +194,8 @@ class StackAssembler:
         """Raise the error naming the task or constraint whose output is bad.
 
         Returns normally when every entry is legitimate (the reductions of
-        :func:`~uvms_qp.hqp.validate.sides_and_rows_ok` overflowed on large finite values).
+        :func:`~uvms_qp.hqp.validate.finite_ok` overflowed on large finite values).
         """
-        lower, upper = self._box
-        if (lower > upper).any():
-            self._raise_empty_box(state)
         for kind, owner, A, lo, hi in (
                 *[("task", task, A, lo, hi) for task, A, lo, hi in self._slots],
                 *[("constraint", c, A, lo, hi) for c, A, lo, hi in self._row_slots]):

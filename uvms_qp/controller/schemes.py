@@ -30,10 +30,10 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, NoSolutionFound
 from ..hqp import Problem
 from ..hqp.registry import get_spec
-from ..safety import SafeSolver, default_alternate
+from ..safety import DEGRADED_STAGES, SafeSolver, default_alternate
 from .assembler import StackAssembler
 from .result import StepResult
 
@@ -94,10 +94,17 @@ class _StackScheme:
         """
         clock = self.safe.clock
         start = clock()
-        self.assembler.fill(state, t)
+        assembler = self.assembler
+        assembler.fill(state, t)
         self._prepare()
-        out = self.safe.solve(self.problem, start)
-        return self.assembler.step_result(out, t, clock() - start, self.name, self.solver_name)
+        try:
+            out = self.safe.solve(self.problem, start)
+        except NoSolutionFound:
+            assembler.check_box(state)
+            raise
+        if out.stage in DEGRADED_STAGES:  # e.g. an empty box, which no back-end can answer
+            assembler.check_box(state)
+        return assembler.step_result(out, t, clock() - start, self.name, self.solver_name)
 
     def _prepare(self) -> None:
         """Per-tick work of the scheme after the stack is written (none by default)."""

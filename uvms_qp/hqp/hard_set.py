@@ -46,11 +46,15 @@ def polish_hard(problem: Problem, x: FloatArray) -> FloatArray:
 
 def hard_feasible(problem: Problem) -> bool:
     """Independent feasibility check of the hard box and rows (HiGHS LP through SciPy)."""
+    if (problem.lo[:problem.head] > problem.hi[:problem.head]).any():
+        return False  # an empty interval: no LP needed (and SciPy refuses such bounds)
     return _hard_lp(problem).status != 2
 
 
 def hard_point(problem: Problem) -> FloatArray | None:
     """A point of the hard set (a vertex from HiGHS' LP through SciPy), or None if none found."""
+    if not hard_feasible(problem):
+        return None
     res = _hard_lp(problem)
     return np.asarray(res.x, dtype=np.float64) if res.status == 0 and res.x is not None else None
 

@@ -36,6 +36,10 @@ from .result import OK_STATUSES, HierarchyResult, Status
 #: ``certify(problem, x, slacks, k) -> bool``: True when level ``k`` is proven optimal at ``x``.
 Certifier = Callable[[Problem, FloatArray, FloatArray, int], bool]
 
+_OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
+_SQRT = math.sqrt
+_INF = math.inf
+
 Measured = tuple[FloatArray, FloatArray, list[float]]
 """``(s, x_clipped, squares)``: slacks at x, x clipped into the box (a view of a fresh array),
 ``[sum of squared box/hard slacks, r_0^2, ..., r_p-1^2]``."""
@@ -113,8 +117,8 @@ def placeholder(problem: Problem) -> FloatArray:
 
 
 def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str = "",
-             info: dict[str, object] | None = None, *, level_tol: float, hard_tol: float,
-             solve_time: float = 0.0, measured: Measured | None = None,
+             info: dict[str, object] | None = None, level_tol: float = 1e-6,
+             hard_tol: float = 1e-9, solve_time: float = 0.0, measured: Measured | None = None,
              certify: Certifier | None = None) -> HierarchyResult:
     """Measure ``x`` against ``problem`` and decide its status (see the module docstring).
 
@@ -153,34 +157,37 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             x = arr
         measured = measure(problem, x)
     s, _, squares = measured
-    head = problem.head
     hv = 0.0
     where = -1
-    if squares[0] != 0.0:  # something outside the box or a hard row (or NaN)
-        hv, where = _largest(s[:head])
-    residuals = [math.sqrt(v) for v in squares[1:]] if math.isfinite(sum(squares)) else [
-        math.inf if v != v else math.sqrt(v) for v in squares[1:]]
+    if squares[0]:  # something outside the box or a hard row (or NaN)
+        hv, where = _largest(s[:problem.head])
+    total = sum(squares)
+    if total == total:  # no NaN (an inf residual stays inf)
+        residuals = list(map(_SQRT, squares[1:]))
+    else:
+        residuals = [_INF if v != v else _SQRT(v) for v in squares[1:]]
     status, infeasible = claim, None
-    if claim in OK_STATUSES:
+    if claim is _OPTIMAL or claim is _LEVEL_INFEASIBLE:
         if hv > hard_tol and hv > hard_tol * problem.hard_scale:
             status = Status.BACKEND_ERROR
             message = (message + "; " if message else "") + (
                 f"{_where(problem, s, where)} violated by {hv:.2e}")
-        elif not math.isfinite(sum(residuals)):
+        elif total == _INF or total != total:
             status = Status.BACKEND_ERROR
             message = (message + "; " if message else "") + "non-finite level residual"
         else:
-            status = Status.OPTIMAL
+            status = _OPTIMAL
+            spans = problem.spans
             for k, r in enumerate(residuals):
-                if r > level_tol and r > level_tol * problem.scale(*problem.spans[k]):
+                if r > level_tol and r > level_tol * problem.scale(*spans[k]):
                     if infeasible is None:
-                        infeasible, status = k, Status.LEVEL_INFEASIBLE
-                    if certify is not None and not certify(problem, x, s, k):
+                        infeasible, status = k, _LEVEL_INFEASIBLE
+                    if certify is None:
+                        break
+                    if not certify(problem, x, s, k):
                         status = Status.UNPROVEN
                         message = (message + "; " if message else "") + (
                             f"level {k} is not proven optimal")
                         break
-                    if certify is None:
-                        break
     return HierarchyResult(x, status, solver, residuals, infeasible, hv, solve_time, message,
-                           info or {}, s, problem.spans, problem.sides[:, :n].copy())
+                           info or {}, s, problem.spans, problem.sides[:, :problem.n].copy())

@@ -61,6 +61,9 @@ class Problem:
         lo: ``sides[0]``.
         hi: ``sides[1]``.
         W: Diagonal metric (n,).
+        w: Level row weights (sum m_k,); change them with :meth:`set_weights` only (other
+            parts derive data from them, refreshed on :attr:`weights_version`).
+        weights_version: Incremented by every :meth:`set_weights`.
         spans: ``(start, end)`` of each level in the stacked rows.
         G: ``(1 + p, M)``: row 0 sums the box and hard rows, row ``k + 1`` the weighted rows of
             level ``k`` (``G @ (s * s)`` gives every squared residual in one product).
@@ -78,7 +81,6 @@ class Problem:
         "M",
         "W",
         "__weakref__",
-        "_w",
         "flags",
         "head",
         "hi",
@@ -90,6 +92,8 @@ class Problem:
         "sizes",
         "spans",
         "unit_weights",
+        "w",
+        "weights_version",
     )
 
     def __init__(self, n: int, hard_rows: int = 0, sizes: Sequence[int] = (), W: Any = None, *,
@@ -117,19 +121,13 @@ class Problem:
         self.W = np.ones(n) if W is None else as_vector(W, "W", n, positive=True)
         ends = np.cumsum((self.head, *self.sizes)).tolist()
         self.spans = tuple(pairwise(ends))
-        self._w = np.ones(ml) if w is None else w
+        self.w = np.ones(ml) if w is None else w
+        self.weights_version = 0
         self.G = np.zeros((1 + len(self.sizes), M))
         self.G[0, :self.head] = 1.0
-        self.set_weights(self._w)
+        self.set_weights(self.w)
 
     # ------------------------------------------------------------------------------- views
-    @property
-    def w(self) -> FloatArray:
-        """Level row weights (sum m_k,), read-only: change them with :meth:`set_weights`."""
-        view = self._w.view()
-        view.flags.writeable = False
-        return view
-
     @property
     def lower(self) -> FloatArray:
         """Hard lower bounds on x (n,), a view of ``lo``."""
@@ -150,7 +148,7 @@ class Problem:
         """The rows of level ``k`` as :class:`~uvms_qp.rows.Rows` (views, weights included)."""
         a, b = self.spans[k]
         h = self.head
-        return Rows(self.A[a:b], self.lo[a:b], self.hi[a:b], self._w[a - h:b - h])
+        return Rows(self.A[a:b], self.lo[a:b], self.hi[a:b], self.w[a - h:b - h])
 
     @property
     def levels(self) -> tuple[Rows, ...]:
@@ -159,14 +157,14 @@ class Problem:
 
     def scale(self, start: int, end: int) -> float:
         """``max(1, max |finite side|)`` over stacked rows ``start:end`` (relative tolerances)."""
-        top = 1.0
-        for side in (self.lo[start:end].tolist(), self.hi[start:end].tolist()):
-            if side:
-                big = max(max(side), -min(side))
-                if big == math.inf:
-                    big = max((abs(v) for v in side if abs(v) != math.inf), default=0.0)
-                top = max(top, big)
-        return top
+        lo, hi = self.sides[:, start:end].tolist()
+        values = lo + hi
+        if not values:
+            return 1.0
+        big = max(max(values), -min(values))
+        if big == math.inf:
+            big = max(map(abs, filter(math.isfinite, values)), default=0.0)
+        return big if big > 1.0 else 1.0
 
     @property
     def hard_scale(self) -> float:
@@ -180,22 +178,23 @@ class Problem:
         The weights must be positive and finite (checked by the writers: the validator, the
         controller's tasks).
         """
-        target = self._w if rows is None else self._w[rows]
+        target = self.w if rows is None else self.w[rows]
         if w is None:
             target.fill(1.0)
         elif w is not target:
             target[...] = w
         G, h = self.G, self.head
         for k, (a, b) in enumerate(self.spans):
-            G[k + 1, a:b] = self._w[a - h:b - h]
-        self.unit_weights = bool((self._w == 1.0).all())
+            G[k + 1, a:b] = self.w[a - h:b - h]
+        self.unit_weights = bool((self.w == 1.0).all())
+        self.weights_version += 1
 
     def relaxed(self, keep: int) -> Problem:
         """The problem with only the ``keep`` highest levels, on the same buffers."""
         end = self.spans[keep - 1][1] if keep else self.head
         ml = end - self.head
         return Problem(self.n, self.mh, self.sizes[:keep], self.W, A=self.A[:end],
-                       sides=self.sides[:, :end], w=self._w[:ml])
+                       sides=self.sides[:, :end], w=self.w[:ml])
 
     def regrouped(self, sizes: Sequence[int], w: FloatArray | None = None) -> Problem:
         """The same rows split into other levels (same total), with their own weights."""
@@ -207,7 +206,7 @@ class Problem:
     def copy(self) -> Problem:
         """A problem with copies of every buffer (a snapshot of this tick's values)."""
         return Problem(self.n, self.mh, self.sizes, self.W.copy(), A=self.A.copy(),
-                       sides=self.sides.copy(), w=self._w.copy())
+                       sides=self.sides.copy(), w=self.w.copy())
 
     def __repr__(self) -> str:
         return f"Problem(n={self.n}, hard_rows={self.mh}, sizes={list(self.sizes)})"

@@ -6,8 +6,8 @@ back-end (:mod:`uvms_qp.hqp.backends`) -> :func:`~uvms_qp.hqp.measure.evaluate`.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
+from time import perf_counter as _clock
 from typing import Any
 
 import numpy as np
@@ -75,6 +75,7 @@ class HierarchySolver:
         self.hard_tol = as_scalar(opts.pop("hard_tol", self.spec.hard_tol),
                                   "options['hard_tol']", positive=True)
         self.backend: Backend = make_backend(self.spec, opts)
+        self._name = self.spec.name
         self.certify: Certifier | None = None
         self.saturate = False
         self.weights = weights
@@ -149,15 +150,13 @@ class HierarchySolver:
 
         The problem's own metric ``problem.W`` is used; ``x`` is measured like any answer.
         """
-        start = time.perf_counter()
+        start = _clock()
         answer = self.backend.solve(problem)
         x, message, info = answer.x, answer.message, answer.info
         if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
             x, message, info = _saturated(problem, x, message, info)
-        return evaluate(problem, x, answer.status, self.spec.name, message, info,
-                        level_tol=self.level_tol, hard_tol=self.hard_tol,
-                        solve_time=time.perf_counter() - start, measured=answer.measured,
-                        certify=self.certify)
+        return evaluate(problem, x, answer.status, self._name, message, info, self.level_tol,
+                        self.hard_tol, _clock() - start, answer.measured, self.certify)
 
 
 def _saturated(problem: Problem, x: Any, message: str, info: dict[str, object]

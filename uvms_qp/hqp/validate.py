@@ -27,69 +27,90 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
-from ..rows import Rows, pair_or_triple_arrays
+from ..rows import Rows
 from .problem import Problem
 
 _Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]
+_Parsed = tuple[list[FloatArray], list[FloatArray], list[FloatArray], list[FloatArray | None],
+                int, list[int]]
+"""Rows, lower sides, upper sides and weights of every item (hard items first), the number of
+hard items and the level sizes."""
 _MIN = np.minimum.reduce
+_F64 = np.dtype(np.float64)
 
 
-def _fast_item(item: Any) -> _Item | None:
-    """``(A, lo, hi, weights)`` of one item in the common form, or None (shapes checked)."""
-    if isinstance(item, Rows):
-        try:
-            A = np.asarray(item.A, dtype=np.float64)
-            lo = np.asarray(item.lower, dtype=np.float64)
-            hi = np.asarray(item.upper, dtype=np.float64)
-            w = None if item.weights is None else np.asarray(item.weights, dtype=np.float64)
-        except (TypeError, ValueError):
-            return None
-        if w is not None and w.shape != lo.shape:
-            return None
-    elif isinstance(item, tuple | list) and len(item) in (2, 3):
-        arrays = pair_or_triple_arrays(item)
-        if arrays is None:
-            return None
-        A, lo, hi = arrays
-        w = None
-    else:
-        return None
-    if A.ndim != 2 or lo.shape != (A.shape[0],) or hi.shape != lo.shape:
-        return None
-    return A, lo, hi, w
+def _float(value: Any) -> FloatArray:
+    """``value`` as a float64 array (no copy when it is one already)."""
+    if type(value) is np.ndarray and value.dtype is _F64:
+        return value
+    return np.asarray(value, dtype=np.float64)
 
 
-def _fast_parse(levels: Any, hard: Any) -> tuple[list[_Item], int, list[int]] | None:
-    """Items of the hard rows and the levels, the number of hard items and the level sizes.
+def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None:
+    """The items in the common form, their column count, hard rows and whether any is weighted.
 
-    None when the input is not in the common form (then :func:`_one_by_one` decides).
+    The column count is -1 when the items disagree. None when the input is not in the common
+    form (then :func:`_one_by_one` decides).
     """
-    if not isinstance(levels, list | tuple):
+    if type(levels) is not list and type(levels) is not tuple:
         return None
-    items: list[_Item] = []
-    if hard is not None:
-        if not isinstance(hard, list | tuple):
-            return None
-        for element in hard:
-            got = _fast_item(element)
-            if got is None:
-                return None
-            items.append(got)
-    n_hard = len(items)
-    sizes = []
-    for level in levels:
-        if not isinstance(level, list | tuple) or (level and not isinstance(
-                level[0], Rows | tuple | list)):
+    As: list[FloatArray] = []
+    los: list[FloatArray] = []
+    his: list[FloatArray] = []
+    ws: list[FloatArray | None] = []
+    sizes: list[int] = []
+    n_hard = mh = 0
+    cols = 0
+    weighted = False
+    groups = levels if hard is None else [hard, *levels]
+    for g, group in enumerate(groups):
+        if type(group) is not list and type(group) is not tuple:
             return None
         m = 0
-        for element in level:
-            got = _fast_item(element)
-            if got is None:
+        for item in group:
+            kind = type(item)
+            try:
+                if kind is tuple or kind is list:
+                    if len(item) == 2:
+                        A, lo = item
+                        lo = hi = _float(lo)
+                    elif len(item) == 3:
+                        A, lo, hi = item
+                        lo, hi = _float(lo), _float(hi)
+                    else:
+                        return None
+                    w = None
+                elif isinstance(item, Rows):
+                    lo, hi = _float(item.lower), _float(item.upper)
+                    A, w = item.A, item.weights
+                    if w is not None:
+                        w = _float(w)
+                        if w.shape != lo.shape:
+                            return None
+                        weighted = True
+                else:
+                    return None
+                A = _float(A)
+            except (TypeError, ValueError):
                 return None
-            items.append(got)
-            m += got[0].shape[0]
-        sizes.append(m)
-    return items, n_hard, sizes
+            shape = A.shape
+            if len(shape) != 2:
+                return None
+            rows, width = shape
+            if lo.shape != (rows,) or hi.shape != (rows,):
+                return None
+            if width != cols:
+                cols = width if not As else -1
+            As.append(A)
+            los.append(lo)
+            his.append(hi)
+            ws.append(w)
+            m += rows
+        if hard is not None and g == 0:
+            n_hard, mh = len(As), m
+        else:
+            sizes.append(m)
+    return (As, los, his, ws, n_hard, sizes), cols, mh, weighted
 
 
 # -------------------------------------------------------------------------- one by one
@@ -125,8 +146,8 @@ def _level_rows(items: Any, n: int | None, label: str) -> tuple[list[Rows], int 
 
 
 def _one_by_one(levels: Any, lower: Any, upper: Any, hard: Any, n: int | None
-                ) -> tuple[list[_Item], int, list[int], FloatArray, FloatArray]:
-    """Validate every item with errors naming the culprit; items, hard items, sizes, box."""
+                ) -> tuple[_Parsed, FloatArray, FloatArray]:
+    """Validate every item with errors naming the culprit; the parsed items and the box."""
     if isinstance(levels, Rows) or not isinstance(levels, Sequence) or isinstance(
             levels, str | bytes):
         raise InputError(f"levels: expected a list of levels, got {type(levels).__name__}")
@@ -149,12 +170,11 @@ def _one_by_one(levels: Any, lower: Any, upper: Any, hard: Any, n: int | None
     check_bounds_order(lo, hi, "bounds")
     if np.any(lo == np.inf) or np.any(hi == -np.inf):
         raise InputError("bounds: a lower bound is +inf or an upper bound is -inf")
-    items: list[_Item] = [(r.A, r.lower, r.upper, r.weights) for r in hard_rows]
-    sizes = []
-    for rows in per_level:
-        items.extend((r.A, r.lower, r.upper, r.weights) for r in rows)
-        sizes.append(sum(r.m for r in rows))
-    return items, len(hard_rows), sizes, lo, hi
+    every = [*hard_rows, *[r for rows in per_level for r in rows]]
+    parsed = ([r.A for r in every], [r.lower for r in every], [r.upper for r in every],
+              [r.weights for r in every], len(hard_rows), [sum(r.m for r in rows)
+                                                           for rows in per_level])
+    return parsed, lo, hi
 
 
 class Validator:
@@ -167,13 +187,18 @@ class Validator:
     def __init__(self) -> None:
         self._problem: Problem | None = None
         self._ones = False  # the kept problem's row weights are all ones
+        self._flat = np.zeros(0)  # the kept problem's sides as one (2 M,) view
         self._constant: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
+        self._last = (np.zeros(0), np.zeros(0), np.zeros(0))
 
     def _constants(self, n: int) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``(-inf, +inf, ones)`` vectors of length n (shared, never written)."""
-        got = self._constant.get(n)
-        if got is None:
-            got = self._constant[n] = (np.full(n, -np.inf), np.full(n, np.inf), np.ones(n))
+        got = self._last
+        if got[2].shape[0] != n:
+            got = self._constant.get(n)
+            if got is None:
+                got = self._constant[n] = (np.full(n, -np.inf), np.full(n, np.inf), np.ones(n))
+            self._last = got
         return got
 
     @staticmethod
@@ -197,33 +222,32 @@ class Validator:
             BoundsError: a lower side above its upper side.
         """
         given = n
-        parsed = _fast_parse(levels, hard)
+        fast = _fast_parse(levels, hard)
         lo_box = hi_box = None
-        if parsed is not None and parsed[0]:
-            items, n_hard, sizes = parsed
-            n = items[0][0].shape[1]
-            if n and all(it[0].shape[1] == n for it in items):
-                lo_inf, hi_inf, _ = self._constants(n)
-                lo_box, hi_box = self._box(lower, n, lo_inf), self._box(upper, n, hi_inf)
+        if fast is not None and fast[1] > 0:
+            parsed, n, mh, weighted = fast
+            lo_inf, hi_inf, _ = self._constants(n)
+            lo_box, hi_box = self._box(lower, n, lo_inf), self._box(upper, n, hi_inf)
         checked = lo_box is None or hi_box is None
         if checked:
-            items, n_hard, sizes, lo_box, hi_box = _one_by_one(levels, lower, upper, hard, given)
-        n = lo_box.shape[0]
-        mh = sum(it[0].shape[0] for it in items[:n_hard])
+            parsed, lo_box, hi_box = _one_by_one(levels, lower, upper, hard, given)
+            n = lo_box.shape[0]
+            mh = sum(A.shape[0] for A in parsed[0][:parsed[4]])
+            weighted = any(w is not None for w in parsed[3])
+        As, los, his, ws, n_hard, sizes = parsed
         problem = self._problem
         if problem is None or problem.n != n or problem.mh != mh or problem.sizes != tuple(sizes):
             problem = self._problem = Problem(n, mh, sizes)
+            self._flat = problem.sides.reshape(-1)
             self._ones = True
-        if items:
-            np.concatenate([it[0] for it in items], out=problem.A[n:])
-        np.concatenate([lo_box, *[it[1] for it in items], hi_box, *[it[2] for it in items]],
-                       out=problem.sides.reshape(-1))
+        if As:
+            np.concatenate(As, out=problem.A[n:])
+        np.concatenate((lo_box, *los, hi_box, *his), out=self._flat)
         if not checked and not sides_and_rows_ok(problem):
             _one_by_one(levels, lower, upper, hard, n)  # raises, or the sums only overflowed
-        level_items = items[n_hard:]
-        if any(it[3] is not None for it in level_items):
-            w = np.concatenate([it[3] if it[3] is not None else np.ones(it[0].shape[0])
-                                for it in level_items])
+        if weighted:
+            w = np.concatenate([w if w is not None else np.ones(A.shape[0])
+                                for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
             if not (math.isfinite(float(w.sum())) and _MIN(w) > 0.0):
                 _one_by_one(levels, lower, upper, hard, n)  # names the rows at fault
             problem.set_weights(w)
@@ -235,21 +259,25 @@ class Validator:
         return problem
 
 
-def sides_and_rows_ok(problem: Problem) -> bool:
-    """The checks of the module docstring on a filled problem, in four warning-free calls.
+def finite_ok(problem: Problem) -> bool:
+    """No NaN or inf in the rows, no NaN side, no lower side ``+inf``, no upper side ``-inf``.
 
-    ``sum(lo) - sum(hi)`` is finite or ``-inf`` exactly when no side is NaN, no lower side is
-    ``+inf`` and no upper side ``-inf`` (``+inf`` and ``-inf`` together give NaN; a finite
-    overflow only sends the problem to the detailed check); ``vdot(A, A)`` is finite exactly
-    when every row entry is (up to the same overflow).
+    Two warning-free reductions: ``sum(lo) - sum(hi)`` is finite or ``-inf`` exactly when the
+    sides are legitimate (``+inf`` and ``-inf`` together give NaN), ``vdot(A, A)`` is finite
+    exactly when every row entry is; a finite overflow (entries beyond ~1e154) gives a false
+    alarm only, for the caller's detailed check to clear.
     """
     v = float(np.vdot(problem.sides, problem.signs))
     if not (v == -math.inf or math.isfinite(v)):
         return False
-    if np.count_nonzero(np.greater(problem.lo, problem.hi, out=problem.flags)):
-        return False
     rows = problem.A[problem.n:]
     return not rows.size or math.isfinite(float(np.vdot(rows, rows)))
+
+
+def sides_and_rows_ok(problem: Problem) -> bool:
+    """:func:`finite_ok`, and no lower side above its upper side."""
+    return finite_ok(problem) and not np.count_nonzero(
+        np.greater(problem.lo, problem.hi, out=problem.flags))
 
 
 def normalize_problem(levels: Any, lower: Any = None, upper: Any = None, weights: Any = None,

@@ -46,7 +46,6 @@ from ..hqp import HierarchyResult, HierarchySolver, Problem, Status
 from ..hqp.hard_set import hard_feasible
 from ..hqp.measure import clip_to_box, evaluate, placeholder
 from ..hqp.registry import available_solvers, get_spec
-from ..hqp.result import OK_STATUSES
 from .deadline import CascadeGuard, backend_limits, guard_cascade
 
 PRIMARY = "primary"
@@ -56,6 +55,8 @@ RELAXED = "relaxed"
 DECAYED = "decayed_previous"
 ZERO = "zero"
 HOLD_ZERO = "hold_zero"
+
+_OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
 
 #: Every stage name, in ladder order.
 STAGES: tuple[str, ...] = (PRIMARY, COLD_RETRY, ALTERNATE, RELAXED, DECAYED, ZERO, HOLD_ZERO)
@@ -253,7 +254,16 @@ class SafeSolver:
         self._failed = None
         result = self._attempt(self.primary, problem, PRIMARY, attempts)
         if result is not None:
-            return self._solved(problem, result, PRIMARY, attempts, start, 0)
+            if result.hard_violation or self.saturate:
+                return self._solved(problem, result, PRIMARY, attempts, start, 0)
+            # the happy path: a verified answer inside the box, nothing to clip
+            self.previous = result.x
+            self.consecutive = 0
+            self.stage_counts[PRIMARY] += 1
+            self.status_counts[result.status.value] += 1
+            elapsed = self.clock() - start
+            return SafeSolve(result.x, result, PRIMARY, (), 0.0, False, elapsed > self._budget,
+                             0, elapsed)
         failed = self._failed
         infeasible = (failed is not None and failed.status == Status.HARD_INFEASIBLE
                       and not hard_feasible(problem))
@@ -278,7 +288,8 @@ class SafeSolver:
         except Exception as exc:  # any back-end exception, ours or foreign, is a failed stage
             attempts.append(f"{stage}: raised {type(exc).__name__}: {exc}")
             return None
-        if result.status in OK_STATUSES:
+        status = result.status
+        if status is _OPTIMAL or status is _LEVEL_INFEASIBLE:
             return result
         self._failed = result
         attempts.append(f"{stage}: {result.status.value}"

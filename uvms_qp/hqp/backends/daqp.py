@@ -7,8 +7,8 @@ lexicographically, and ``H`` regularises whatever freedom is left. We pass
 * ``H = diag(W)``, ``f = 0``: the final regularisation is exactly ``min x' W x``;
 * group 0: the box (DAQP's simple bounds) and the hard rows; hard equality rows start active and
   immutable;
-* group k: the rows of level k-1, read in place from ``problem.A[n:]``; the sides are DAQP's
-  clamped copies ``max(lo, -1e30)``, ``min(hi, 1e30)`` (its infinity);
+* group k: the rows of level k-1; rows and sides are read in place from the problem's buffers
+  (DAQP treats sides beyond ``1e30``, infinities included, as absent);
 * per-row soft weights (below), so that every level minimises its weighted violation.
 
 Weights: DAQP softens every row of a level after scaling it to unit norm in the metric of the
@@ -54,9 +54,6 @@ from ..result import Status
 from . import Answer
 from .daqp_binding import DaqpBinding, open_daqp
 
-DAQP_INF = 1e30
-"""DAQP's infinity: sides beyond it are clamped before they are handed over."""
-
 #: DAQP settings a caller may set (the keys of ``daqp.Model.settings``).
 DAQP_SETTINGS = frozenset((
     "primal_tol", "dual_tol", "zero_tol", "pivot_tol", "progress_tol", "cycle_tol",
@@ -65,9 +62,11 @@ DAQP_SETTINGS = frozenset((
 ))
 
 _SOLVED = (1, 2)
+_OPTIMAL = Status.OPTIMAL
 _STOP = (-1, -7)  # empty hard set, time limit: another rho_soft cannot help
 _ACCEPT = 1e-7  # box/hard violation accepted (then clipped / projected) whatever the scale
 _POLISH = 1e-12  # hard rows violated by more than this are projected
+_ROUND_OFF = 1e-13  # a clip into the box this small is not measured again (no hard rows)
 _KEEP = 8  # set-ups kept (the problems a solver alternates between: full, relaxed)
 
 _FLAGS = {
@@ -108,12 +107,11 @@ def check_settings(options: dict[str, Any]) -> dict[str, Any]:
 
 
 class _Setup:
-    """DAQP set up on one problem: clamped sides, working sets, soft weights."""
+    """DAQP set up on one problem: working sets, and the per-row soft weights' data."""
 
     __slots__ = (
         "W",
         "binding",
-        "dsides",
         "eq",
         "eq_key",
         "first",
@@ -123,27 +121,27 @@ class _Setup:
         "levels",
         "problem",
         "rho",
-        "row_level",
+        "scatter",
         "sense0",
         "setup_time",
         "squares",
         "starts",
+        "version",
         "views",
     )
 
     def __init__(self, problem: Problem, settings: dict[str, Any], binding: DaqpBinding) -> None:
         n, head, M = problem.n, problem.head, problem.M
         self.problem, self.head, self.W = problem, head, problem.W
-        self.dsides = np.empty((2, M))
-        self.clamp()
         self.eq = problem.lo[n:head] == problem.hi[n:head]
         self.eq_key = self.eq.tobytes()
         self.sense0 = np.zeros(M, dtype=np.intc)  # the cold-start working set
         self.sense0[n:head][self.eq] = 5  # hard equality rows: active and immutable
         bp = np.unique(np.cumsum((head, *problem.sizes))).astype(np.intc)
         self.binding = binding
+        # DAQP reads the rows and sides in place (it takes +-inf sides as its own infinity)
         self.flag, self.setup_time = binding.setup(
-            np.diag(self.W), np.zeros(n), problem.A[n:], self.dsides[1], self.dsides[0],
+            np.diag(self.W), np.zeros(n), problem.A[n:], problem.hi, problem.lo,
             self.sense0.copy(), bp)
         sizes = problem.sizes
         ml = M - head
@@ -151,9 +149,10 @@ class _Setup:
         self.inv_W = 1.0 / self.W
         filled = [k for k, m in enumerate(sizes) if m]  # reduceat needs non-empty segments
         self.starts = (np.cumsum((0, *sizes))[filled]).astype(np.intp)
-        self.row_level = np.repeat(np.arange(len(filled)), [sizes[k] for k in filled])
         self.levels = problem.A[head:]
         self.rho = np.zeros(M)
+        self.scatter: dict[float, FloatArray] = {}
+        self.version = -1
         self.first = True
         self.views: tuple[FloatArray, FloatArray] | None = None
         if self.flag >= 0:
@@ -162,27 +161,31 @@ class _Setup:
             if views is not None and ml:
                 self.views = (views[0][head:], views[1][head:])
 
-    def clamp(self) -> None:
-        """DAQP's sides: ``min(max(sides, -1e30), 1e30)`` (lower side, then upper side)."""
-        np.maximum(self.problem.sides, -DAQP_INF, out=self.dsides)
-        np.minimum(self.dsides, DAQP_INF, out=self.dsides)
-
     def level_weights(self, rho_soft: float, out: FloatArray) -> None:
-        """The per-row ``rho_i`` of the module docstring, written into ``out`` (level rows)."""
+        """The per-row ``rho_i`` of the module docstring, written into ``out`` (level rows).
+
+        ``rho_i = S_ik top_k`` with ``top_k = max_{j in level k} w_j |a_j W^(-1/2)|^2`` and the
+        scatter matrix ``S_ik = rho_soft / w_i`` for the rows of level k (0 elsewhere), one
+        product for all rows.
+        """
         problem = self.problem
         q = np.square(self.levels, out=self.squares).dot(self.inv_W)  # |a_i W^(-1/2)|^2
-        weighted = not problem.unit_weights
-        if weighted:
+        if not problem.unit_weights:
             q *= problem.w
-        top = np.maximum.reduceat(q, self.starts)
-        top *= rho_soft
-        np.take(top, self.row_level, out=out)
-        if weighted:
-            out /= problem.w
+        if problem.weights_version != self.version:
+            self.scatter.clear()
+            self.version = problem.weights_version
+        scatter = self.scatter.get(rho_soft)
+        if scatter is None:
+            sizes = [m for m in problem.sizes if m]
+            scatter = np.zeros((q.shape[0], len(sizes)))
+            scatter[np.arange(q.shape[0]), np.repeat(np.arange(len(sizes)), sizes)] = (
+                rho_soft / problem.w)
+            self.scatter[rho_soft] = scatter
+        scatter.dot(np.maximum.reduceat(q, self.starts), out=out)
 
     def load(self, rho_soft: float) -> None:
         """Hand this solve's rows, sides and soft weights to DAQP (warm start kept)."""
-        self.clamp()
         views = self.views
         if self.first:  # set up on these values already: only the weights
             self.first = False
@@ -263,6 +266,9 @@ class DaqpBackend:
         setup = self._setup(problem)
         if setup.flag < 0:
             self.reset()
+            if setup.flag == -1 or not hard_feasible(problem):
+                return Answer(None, Status.HARD_INFEASIBLE,
+                              "the hard box and hard rows admit no point", {"exitflag": setup.flag})
             return Answer(None, Status.BACKEND_ERROR,
                           f"DAQP setup failed (exit flag {setup.flag})", {"exitflag": setup.flag})
         binding = setup.binding
@@ -292,7 +298,7 @@ class DaqpBackend:
                                    "daqp_setup_time": setup_time, "iterations": iterations,
                                    "rho_soft": rho}
         if accepted is not None:
-            return Answer(accepted[0], Status.OPTIMAL, "", info, accepted[1])
+            return Answer(accepted[0], _OPTIMAL, "", info, accepted[1])
         self.reset()  # set up afresh after a failure
         reason = _FLAGS.get(flag, "unknown failure")
         status = Status.BACKEND_ERROR
@@ -303,24 +309,42 @@ class DaqpBackend:
         return Answer(x, status, f"DAQP exit flag {flag}: {reason}", info)
 
     def _accept(self, problem: Problem, raw: Any) -> tuple[FloatArray, Measured] | None:
-        """``(x, measurement)`` when DAQP's answer holds the box and hard rows, else None."""
+        """``(x, measurement)`` when DAQP's answer holds the box and hard rows, else None.
+
+        ``x`` is the answer clipped into the box; after a clip (round-off at an active bound,
+        common) it is measured again, so the measurement is exactly that of ``x``.
+        """
         if getattr(raw, "shape", None) != (problem.n,):
             return None
         measured = measure(problem, raw)
-        s, x, squares = measured
-        if squares[0] == 0.0:  # nothing outside the box or a hard row
-            return (x, measured) if math.isfinite(sum(squares)) else None
-        if not math.isfinite(sum(squares)):
+        squares = measured[2]
+        total = sum(squares)
+        if total != total or total == math.inf:  # NaN / inf in x (or an overflow)
             return None
+        head_sq = squares[0]
+        if not head_sq:  # nothing outside the box or a hard row
+            return measured[1], measured
         n, head = problem.n, problem.head
-        box = float(np.abs(s[:n]).max())
-        hard = float(np.abs(s[n:head]).max()) if problem.mh else 0.0
-        if max(box, hard) > max(_ACCEPT, self.spec.hard_tol * problem.hard_scale):
-            return None
+        if head_sq <= _ROUND_OFF * _ROUND_OFF and not problem.mh:
+            # round-off outside an active bound (common): x is the clipped answer; the other
+            # rows move by at most |A| 1e-13, far below every tolerance, so the measurement
+            # stands with the box rows' slacks made exactly zero
+            measured[0][:n] = 0.0
+            squares[0] = 0.0
+            return measured[1], measured
+        if problem.mh or head_sq > _ACCEPT * _ACCEPT:
+            values = measured[0][:head].tolist()
+            box = max(max(values[:n]), -min(values[:n]))
+            hard = max(max(values[n:]), -min(values[n:])) if problem.mh else 0.0
+            if max(box, hard) > _ACCEPT and max(box, hard) > (
+                    self.spec.hard_tol * problem.hard_scale):
+                return None
+        else:
+            box, hard = 1.0, 0.0  # the box alone, by at most 1e-7
+        x = measured[1]
         if box:  # round-off outside the box: x is the clipped answer, measured again
             measured = measure(problem, x)
-            s = measured[0]
-            hard = float(np.abs(s[n:head]).max()) if problem.mh else 0.0
+            hard = math.sqrt(measured[2][0])  # the box rows hold exactly now
         if hard > _POLISH:
             x = polish_hard(problem, x)
             measured = measure(problem, x)
