@@ -183,7 +183,7 @@ class SafeSolver:
         self.relax = bool(relax)
         self.strict = bool(strict)
         self.saturate = bool(saturate)
-        self.clock = clock
+        self._clock = clock
         self._budget = float("inf") if self.deadline is None else self.deadline
         options = {} if options is None else options
         if not isinstance(options, dict):
@@ -212,6 +212,17 @@ class SafeSolver:
         self.status_counts: Counter[str] = Counter()
         self._relaxed: dict[int, tuple[Problem, Problem]] = {}
         self._failed: HierarchyResult | None = None
+
+    @property
+    def clock(self) -> Callable[[], float]:
+        """The clock [s] of the deadline (also the cascades' guards' clock)."""
+        return self._clock
+
+    @clock.setter
+    def clock(self, clock: Callable[[], float]) -> None:
+        self._clock = clock
+        for guard in self._guards:
+            guard.clock = clock
 
     @property
     def level_tol(self) -> float:
@@ -246,7 +257,7 @@ class SafeSolver:
             NoSolutionFound: strict mode, and no solver stage produced a verified solve.
         """
         if start is None:
-            start = self.clock()
+            start = self._clock()
         end = start + self._budget
         for guard in self._guards:
             guard.end = end
@@ -261,7 +272,7 @@ class SafeSolver:
             self.consecutive = 0
             self.stage_counts[PRIMARY] += 1
             self.status_counts[result.status.value] += 1
-            elapsed = self.clock() - start
+            elapsed = self._clock() - start
             return SafeSolve(result.x, result, PRIMARY, (), 0.0, False, elapsed > self._budget,
                              0, elapsed)
         failed = self._failed
@@ -298,7 +309,7 @@ class SafeSolver:
 
     def _solver_stages(self, problem: Problem, attempts: list[str], start: float,
                        end: float) -> SafeSolve | None:
-        clock = self.clock
+        clock = self._clock
         if clock() > end:
             attempts.append("deadline passed: solver stages skipped")
             return None
@@ -351,7 +362,7 @@ class SafeSolver:
         self.consecutive = 0
         self.stage_counts[stage] += 1
         self.status_counts[result.status.value] += 1
-        elapsed = self.clock() - start
+        elapsed = self._clock() - start
         return SafeSolve(x, result, stage, tuple(attempts), clipped,
                          clipped > self.clip_flag_tol, elapsed > self._budget, dropped, elapsed)
 
@@ -373,7 +384,7 @@ class SafeSolver:
         self.consecutive += 1
         self.stage_counts[stage] += 1
         self.status_counts[result.status.value] += 1
-        elapsed = self.clock() - start
+        elapsed = self._clock() - start
         return SafeSolve(result.x, result, stage, tuple(attempts), 0.0, False,
                          elapsed > self._budget, 0, elapsed)
 
@@ -381,7 +392,7 @@ class SafeSolver:
                  attempts: list[str], start: float) -> HierarchyResult:
         return evaluate(problem, x, status, self.name, f"{stage}: " + "; ".join(attempts),
                         level_tol=self.primary.level_tol, hard_tol=self.primary.hard_tol,
-                        solve_time=self.clock() - start)
+                        solve_time=self._clock() - start)
 
 
 def fallback_summary(counts: Counter[str]) -> str:
