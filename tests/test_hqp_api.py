@@ -120,7 +120,7 @@ def test_daqp_weights_mean_what_they_mean_on_the_cascades():
     """An unmet level: DAQP minimises the weighted violation sum w_i s_i^2, like a cascade.
 
     Without per-row soft weights DAQP would return 0.5 here (it normalises rows: the compromise
-    of weights 1/|a_i|^2, whatever w); uvms_qp.hqp.daqp_weights gives it the weighted one.
+    of weights 1/|a_i|^2, whatever w); its per-row soft weights give it the weighted one.
     """
     A = np.array([[1.0, 0.0], [10.0, 0.0]])
     b = np.array([0.0, 10.0])  # x0 = 0 and 10 x0 = 10 conflict

@@ -91,6 +91,7 @@ class StackAssembler:
         self._box_cons = [c for c in self.stack.constraints if c.has_box]
         self._dynamic_box = [c for c in self._box_cons if not c.is_static]
         self._box = problem.sides[:, :nv]
+        self._lower, self._upper = self._box  # views
         self._static_box = np.empty((2, nv))
         self._static_box[0], self._static_box[1] = -np.inf, np.inf
         for c in self._box_cons:
@@ -127,8 +128,7 @@ class StackAssembler:
             self._refresh_weights()
         self._box[...] = self._static_box
         if self._dynamic_box:
-            lower, upper = self._box
-            dt = self.dt
+            lower, upper, dt = self._lower, self._upper, self.dt
             for c in self._dynamic_box:
                 c.fill_box(state, dt, lower, upper)
         for c, HA, Hlo, Hhi in self._row_slots:
