@@ -171,10 +171,16 @@ def problem_arrays(problem: Problem) -> tuple[FloatArray, FloatArray, FloatArray
 
 # ------------------------------------------------------------------------------------ certify
 class _Frame:
-    """Everything ``certify`` and ``repair`` measure once per answer."""
+    """Everything ``certify`` and ``repair`` measure once per answer.
+
+    The frozen sides of every row are ``lo - |s|`` and ``hi + |s|`` (``s`` its violation at x):
+    for box and hard rows ``s`` is round-off (x is inside), for the rows of a level they keep
+    the violation the level has at x, which is how a higher level constrains a lower one.
+    """
 
     def __init__(self, A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
-                 sizes: Sequence[int], w: FloatArray, x: FloatArray, act_tol: float) -> None:
+                 sizes: Sequence[int], w: FloatArray, x: FloatArray, act_tol: float,
+                 frozen: _Frame | None = None) -> None:
         self.A, self.lo, self.hi, self.n, self.mh = A, lo, hi, int(n), int(mh)
         self.sizes = tuple(int(m) for m in sizes)
         self.w = w
@@ -183,28 +189,27 @@ class _Frame:
         self.x = x
         y = A @ x
         self.y = y
-        self.s = y - np.minimum(np.maximum(y, lo), hi)
+        s = y - np.minimum(np.maximum(y, lo), hi)
+        self.s = s
+        a = np.abs(s)
+        if frozen is None:
+            self.lo_f = lo - a
+            self.hi_f = hi + a
+        else:  # judge this point against another point's frozen set
+            self.lo_f, self.hi_f = frozen.lo_f, frozen.hi_f
         fin_lo, fin_hi = np.isfinite(lo), np.isfinite(hi)
-        self.eq = lo == hi
-        abs_lo = np.abs(np.where(fin_lo, lo, 0.0))
-        abs_hi = np.abs(np.where(fin_hi, hi, 0.0))
-        # outward normal +a at the upper side, -a at the lower side; violated higher-level
-        # rows sit at their frozen side (their own value), so they count as active
-        self.up = fin_hi & (y >= hi - act_tol * (1.0 + abs_hi))
-        self.dn = fin_lo & (y <= lo + act_tol * (1.0 + abs_lo))
-        self.d_up = np.maximum(np.where(fin_hi, hi - y, 0.0), 0.0)
-        self.d_dn = np.maximum(np.where(fin_lo, y - lo, 0.0), 0.0)
-        norms = np.sqrt(np.einsum("ij,ij->i", A, A))
-        self.norms = norms
-        self.live = norms > 0.0
-        safe = np.where(self.live, norms, 1.0)
-        self.unit = A / safe[:, None]
+        tol_lo = act_tol * (1.0 + np.abs(np.where(fin_lo, lo, 0.0)))
+        tol_hi = act_tol * (1.0 + np.abs(np.where(fin_hi, hi, 0.0)))
+        # outward normal +a where a row sits at its frozen upper side, -a at its lower side
+        self.d_up = np.where(fin_hi, np.maximum(self.hi_f - y, 0.0), np.inf)
+        self.d_dn = np.where(fin_lo, np.maximum(y - self.lo_f, 0.0), np.inf)
+        self.up = self.d_up <= tol_hi
+        self.dn = self.d_dn <= tol_lo
+        self.norms = np.sqrt(np.einsum("ij,ij->i", A, A))
+        self.live = self.norms > 0.0
         self.width = hi[: self.n] - lo[: self.n]  # inf for a missing side
         self.boxed = np.isfinite(self.width)
-        box_s = self.s[: self.n]
-        hv = float(np.abs(box_s).max(initial=0.0))
-        if self.mh:
-            hv = max(hv, float(np.abs(self.s[self.n: self.head]).max()))
+        hv = float(a[: self.head].max(initial=0.0))
         self.hard_violation = hv
 
     def level(self, k: int) -> slice:
@@ -222,47 +227,41 @@ class _Frame:
         return max(1.0, float(np.abs(sides).max(initial=0.0)))
 
 
-def _stationarity(fr: _Frame, k: int) -> tuple[FloatArray, FloatArray, float, float]:
+def _stationarity(fr: _Frame, k: int) -> tuple[FloatArray, float, float]:
     """NNLS multipliers of level k's gradient on the active normals above it.
 
     Returns:
-        ``(r, g, df, scale_g)``: the residual ``g + N lambda``, the gradient, the convexity
-        bound ``sum_i mu_i delta_i`` of the constraints counted as active (the box-width part is
-        added by the caller), and the magnitude ``sum_i w_i |s_i| |a_i|`` of the gradient's
-        terms.
+        ``(r, df, scale_g)``: the residual ``g + N lambda``, the convexity bound
+        ``sum_i mu_i delta_i`` of the constraints counted as active (the box-width part is added
+        by the caller), and the magnitude ``sum_i w_i |s_i| |a_i| + sum_i lambda_i`` of the
+        terms that cancel in ``r`` (round-off scale).
     """
     sl = fr.level(k)
-    wk = fr.w[fr.starts[k]: fr.starts[k + 1]]
-    ws = wk * fr.s[sl]
+    ws = fr.w[fr.starts[k]: fr.starts[k + 1]] * fr.s[sl]
     g = fr.A[sl].T @ ws
     scale_g = float(np.abs(ws) @ fr.norms[sl])
     P = sl.start  # constraint rows: box, hard rows and every higher level
-    live, eq = fr.live[:P], fr.eq[:P]
-    free = np.flatnonzero(live & eq)
-    up = np.flatnonzero(live & ~eq & fr.up[:P])
-    dn = np.flatnonzero(live & ~eq & fr.dn[:P])
-    idx = np.concatenate((free, free, up, dn))
-    if not idx.size:
-        return g, g, 0.0, scale_g
-    sign = np.concatenate((np.ones(free.size), -np.ones(free.size), np.ones(up.size),
-                           -np.ones(dn.size)))
-    N = (fr.unit[idx] * sign[:, None]).T
+    live = fr.live[:P]
+    up = np.flatnonzero(live & fr.up[:P])
+    dn = np.flatnonzero(live & fr.dn[:P])
+    if not up.size + dn.size:
+        return g, 0.0, scale_g
+    idx = np.concatenate((up, dn))
+    nrm = fr.norms[idx]
+    sign = np.concatenate((1.0 / nrm[: up.size], -1.0 / nrm[up.size:]))
+    N = fr.A[idx].T * sign  # unit outward normals as columns
     lam, _ = nnls(N, -g, maxiter=max(50, 10 * idx.size))
     r = g + N @ lam
-    # convexity bound of the one-sided constraints counted as active while not exactly at
-    # their side: mu_i delta_i with mu_i = lambda_i / |a_i| (normalised columns)
-    f = free.size
-    mu_up = lam[2 * f: 2 * f + up.size] / fr.norms[up]
-    mu_dn = lam[2 * f + up.size:] / fr.norms[dn]
-    df = float(mu_up @ fr.d_up[up] + mu_dn @ fr.d_dn[dn])
-    return r, g, df, scale_g + float(lam.sum())  # columns have unit norm
+    mu = lam / nrm  # multipliers of the raw rows
+    df = float(mu[: up.size] @ fr.d_up[up] + mu[up.size:] @ fr.d_dn[dn])
+    return r, df, scale_g + float(lam.sum())
 
 
 def certify(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
             sizes: Sequence[int], w: FloatArray, x: FloatArray, *,
             level_tol: float = LEVEL_TOL, opt_tol: float = OPT_TOL, stat_tol: float = STAT_TOL,
-            act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL, exact: bool = True
-            ) -> Certificate:
+            act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL, exact: bool = True,
+            keep: Sequence[LevelCertificate] = ()) -> Certificate:
     """Prove each level of ``x`` optimal, or find how to improve it (see the module docstring).
 
     Args:
@@ -283,6 +282,9 @@ def certify(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
         hard_tol: Relative tolerance of the box and hard rows.
         exact: Resolve inconclusive bounds with the exact level optimum (an active-set solve);
             False reports them as unproven.
+        keep: Verdicts carried over for the first ``len(keep)`` levels (their residuals are
+            measured again): for a point that no row of those levels violates more than the
+            point they were proven at, as :func:`repair` produces, they still hold.
 
     Returns:
         The :class:`Certificate`; levels are judged against the frozen set at ``x`` whatever
@@ -301,6 +303,10 @@ def certify(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
     for k in range(p):
         rho = fr.residual(k)
         scale = fr.scale(k)
+        if k < len(keep):
+            c = keep[k]
+            out.append(LevelCertificate(k, c.verdict, rho, c.stationarity, c.gap))
+            continue
         if rho <= level_tol * scale:
             out.append(LevelCertificate(k, MET, rho))
             continue
@@ -318,7 +324,7 @@ def _gap(df: float, rho: float) -> float:
 
 def _certify_level(fr: _Frame, k: int, rho: float, scale: float, opt_tol: float,
                    stat_tol: float, exact: bool) -> LevelCertificate:
-    r, _, df_act, scale_g = _stationarity(fr, k)
+    r, df_act, scale_g = _stationarity(fr, k)
     nr = float(np.linalg.norm(r))
     rb = np.abs(r[: fr.n])
     unboxed = ~fr.boxed
@@ -335,11 +341,11 @@ def _certify_level(fr: _Frame, k: int, rho: float, scale: float, opt_tol: float,
     better = _level_optimum(fr, k)
     if better is None:
         return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
-    sub = _Frame(fr.A, fr.lo, fr.hi, fr.n, fr.mh, fr.sizes, fr.w, better, 0.0)
+    sub = _Frame(fr.A, fr.lo, fr.hi, fr.n, fr.mh, fr.sizes, fr.w, better, 1e-9, frozen=fr)
     # x+ must keep the frozen set of x and be stationary at round-off on its own active set
     if not _keeps_frozen(fr, sub, k):
         return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
-    r_plus, _, _, scale_plus = _stationarity(sub, k)
+    r_plus, _, scale_plus = _stationarity(sub, k)
     if float(np.abs(r_plus).max(initial=0.0)) > max(stat_tol, 1e-12) * 1e3 * max(scale_plus,
                                                                                   1e-300):
         return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
@@ -353,16 +359,9 @@ def _certify_level(fr: _Frame, k: int, rho: float, scale: float, opt_tol: float,
 def _keeps_frozen(fr: _Frame, sub: _Frame, k: int, tol: float = 1e-9) -> bool:
     """True when ``sub.x`` lies in the frozen set of level k taken at ``fr.x`` (to ``tol``)."""
     P = fr.level(k).start
+    y = sub.y[:P]
     rel = tol * (1.0 + np.abs(fr.y[:P]))
-    pinned = fr.eq[:P].copy()
-    pinned[fr.head:] |= fr.s[fr.head:P] != 0.0
-    y, y0 = sub.y[:P], fr.y[:P]
-    if np.any(np.abs(y[pinned] - y0[pinned]) > rel[pinned]):
-        return False
-    lo, hi = fr.lo[:P], fr.hi[:P]
-    ok_hi = ~np.isfinite(hi) | (y <= hi + rel)
-    ok_lo = ~np.isfinite(lo) | (y >= lo - rel)
-    return bool(np.all((ok_hi & ok_lo) | pinned))
+    return bool(np.all((y <= fr.hi_f[:P] + rel) & (y >= fr.lo_f[:P] - rel)))
 
 
 # ------------------------------------------------------------------------ exact level solves
@@ -392,18 +391,18 @@ def _level_qp(fr: _Frame, k: int) -> tuple[FloatArray, FloatArray, FloatArray, F
     c[:n] = -Ae.T @ (we * be)
     P = sl.start
     live = fr.live[:P]
-    pinned = fr.eq[:P].copy()
-    pinned[fr.head:] |= fr.s[fr.head:P] != 0.0
+    lo_f, hi_f, nrm = fr.lo_f[:P], fr.hi_f[:P], fr.norms[:P]
+    unit = fr.A[:P] / np.where(live, nrm, 1.0)[:, None]
+    pinned = lo_f == hi_f
     pin = np.flatnonzero(live & pinned)
-    unit = fr.unit[:P]
     E = np.hstack((unit[pin], np.zeros((pin.size, q))))
-    e = fr.y[pin] / fr.norms[pin]
+    e = lo_f[pin] / nrm[pin]
     rest = np.flatnonzero(live & ~pinned)
     G_rows, h_rows = [], []
-    for side, sign in ((fr.hi, 1.0), (fr.lo, -1.0)):
+    for side, sign in ((hi_f, 1.0), (lo_f, -1.0)):
         cut = rest[np.isfinite(side[rest])]
         G_rows.append(np.hstack((sign * unit[cut], np.zeros((cut.size, q)))))
-        h_rows.append(sign * side[cut] / fr.norms[cut])
+        h_rows.append(sign * side[cut] / nrm[cut])
     if q:
         Ai = Ak[ine]
         ni = np.sqrt(np.einsum("ij,ij->i", Ai, Ai) + 1.0)
@@ -560,7 +559,7 @@ def repair(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
         if better is None:
             return Repair(x, cert, False, f"the exact solve of level {k} failed")
         z = _clip_box(fr, better)
-    new = certify(A, lo, hi, n, mh, sizes, w, z, **tols)
+    new = certify(A, lo, hi, n, mh, sizes, w, z, keep=cert.levels[:first], **tols)
     if new.ok:
         return Repair(z, new, True, f"repaired from level {first}")
     bad = new.first_failure
