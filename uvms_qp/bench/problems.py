@@ -179,8 +179,8 @@ def _repeated(rng: np.random.Generator, n: int, box: str, variant: str) -> Famil
     if variant == "same":
         lo_r, hi_r = sorted((c * lo[i], c * hi[i]))
     else:
-        t = c * float(np.where(np.isfinite(lo[i]), lo[i], hi[i])) + rng.uniform(0.5, 3.0) * rng.choice(
-            [-1.0, 1.0])
+        side = float(np.where(np.isfinite(lo[i]), lo[i], hi[i]))
+        t = c * side + rng.uniform(0.5, 3.0) * rng.choice([-1.0, 1.0])
         lo_r = hi_r = t
     levels[k] = _with_row(levels[k], a, lo_r, hi_r, rng)
     return FamilyProblem("repeated", variant, 0, n, levels, lower, upper, box=box)
@@ -200,7 +200,7 @@ def _zero_row(rng: np.random.Generator, n: int, box: str, variant: str) -> Famil
 def _near_singular(rng: np.random.Generator, n: int, box: str, variant: str) -> FamilyProblem:
     levels, lower, upper = base_problem(rng, n, box, ineq_share=0.2)
     k = int(rng.integers(len(levels)))
-    A, lo, hi, w = levels[k]
+    A = levels[k][0]
     m = max(2, min(A.shape[0], n - 1))
     if variant == "cond":
         cond = 10.0 ** rng.uniform(6, 10)

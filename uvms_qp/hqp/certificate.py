@@ -7,17 +7,16 @@ level row weights ``w``. Level k's weighted violation is ``f_k(x) = 1/2 sum_i w_
 ``s = A_k x - clip(A_k x, lo_k, hi_k)``; its residual is ``rho_k = sqrt(2 f_k)``.
 
 What a certificate proves. Given an answer ``x`` inside the hard set, level k is optimal when no
-point ``x'`` of the *frozen set* has a smaller ``f_k``: the box and hard rows hold, every row of
-every higher level keeps the violation it has at ``x`` (equality rows and violated inequality rows
-keep their value ``a_i x``; satisfied inequality rows stay inside ``[lo_i, hi_i]``). When every
-higher level is itself optimal this is exactly the set of points that keep each higher level's
-violation, so level-by-level certificates prove the lexicographic optimum. ``f_k`` is convex and
-continuously differentiable with gradient ``g = A_k^T (w_k s_k)``, and the frozen set is a
-polyhedron, so x is optimal iff ``-g`` lies in the cone of the outward normals of the constraints
-active at x: free sign for rows held at a value (equality rows, violated higher-level rows, hard
-equalities), one-sided for box bounds, hard inequality rows and satisfied higher-level inequality
-rows at a side. The multipliers come from one non-negative least-squares solve
-(:func:`scipy.optimize.nnls`, free columns entered as ``+c`` and ``-c``, columns normalised):
+point ``x'`` of the *frozen set* has a smaller ``f_k``: the box and hard rows hold and every row
+of every higher level keeps at most the violation it has at ``x`` (``lo_i - |s_i| <= a_i x' <=
+hi_i + |s_i|``, the lexicographic definition row by row). When a higher level is optimal this is
+exactly the set of points that keep its optimum (its violations are unique), so level-by-level
+certificates prove the lexicographic optimum. ``f_k`` is convex and continuously differentiable
+with gradient ``g = A_k^T (w_k s_k)``, and the frozen set is a polyhedron, so x is optimal iff
+``-g`` lies in the cone of the outward normals of the constraints active at x (one-sided: ``+a``
+at a frozen upper side, ``-a`` at a frozen lower side; a row held at a value, such as an equality
+row met exactly, is active on both sides, i.e. free in sign). The multipliers come from one
+non-negative least-squares solve (:func:`scipy.optimize.nnls`, unit columns):
 
     lambda = argmin_{lambda >= 0} |g + N lambda|,   r = g + N lambda.
 
@@ -371,10 +370,10 @@ def _level_qp(fr: _Frame, k: int) -> tuple[FloatArray, FloatArray, FloatArray, F
 
     ``min 1/2 z' H z + c' z`` with ``H = diag(A_e' W_e A_e, W_i)``, ``c = [-A_e' W_e b; 0]``
     (equality rows ``e`` of level k in x, one slack ``t_i`` per inequality row ``i``, kept by
-    ``lo_i <= a_i x - t_i <= hi_i``), equalities ``E z = e`` (hard equalities; higher-level
-    rows held at their value: equality rows and violated inequality rows) and inequalities
-    ``G z <= h`` (box, hard inequality rows, satisfied higher-level inequality rows, level k's
-    inequality rows). Every constraint row is normalised. Returns ``(H, c, E, e, G, h, z0)``.
+    ``lo_i <= a_i x - t_i <= hi_i``), equalities ``E z = e`` (rows whose frozen sides coincide:
+    hard equalities, higher equality rows met exactly) and inequalities ``G z <= h`` (the frozen
+    sides of every other box, hard and higher-level row, level k's inequality rows). Every
+    constraint row is normalised. Returns ``(H, c, E, e, G, h, z0)``.
     """
     n = fr.n
     sl = fr.level(k)
