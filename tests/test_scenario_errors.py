@@ -84,7 +84,7 @@ def test_the_base_scenario_is_valid():
     assert scenario.steps == 10
     assert scenario.tracking == "tool"
     assert scenario.events[0].update == {"force": 10.0}
-    assert scenario.task("current_alignment").heading == pytest.approx(0.2)
+    assert scenario.build_stack().task("current_alignment").heading == pytest.approx(0.2)
 
 
 # (old text, new text, expected path, fragment of the message)

@@ -1,8 +1,9 @@
-"""The ``uvms-qp`` command line.
+"""The ``uvms-qp`` command line (also ``python -m uvms_qp`` and ``python -m uvms_qp.cli``).
 
 Each sub-command lives in its own module of this package and exposes
 ``register(subparsers) -> argparse.ArgumentParser`` which sets ``func=run`` on its parser.
-Adding a command is a one-file change: the modules are discovered at start-up.
+Adding a command is a one-file change: the modules are discovered at start-up. Any error of the
+input (a scenario file, a model file, an option) is one line on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -46,8 +47,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except UvmsQpError as exc:
-        print(f"uvms-qp {args.command}: error: {exc}", file=sys.stderr)
+        print(f"uvms-qp {args.command}: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
+
+
+def one_line(message: str) -> str:
+    """A message on one line: its non-empty lines joined with ``"; "``."""
+    return "; ".join(line.strip() for line in message.splitlines() if line.strip())
 
 
 if __name__ == "__main__":  # pragma: no cover
