@@ -327,8 +327,9 @@ class Table:
         """
         unknown = [key for key in self.data if key not in self._read]
         if unknown:
-            known = ", ".join(sorted(self._read)) or "(none)"
-            hint = did_you_mean(unknown[0], sorted(self._read))
+            names = sorted(self._read.union(self.keys or ()))
+            known = ", ".join(names) or "(none)"
+            hint = did_you_mean(unknown[0], names)
             message = f"unknown key {unknown[0]!r}; known keys: {known}{hint}"
             raise ConfigError(message, self.at(unknown[0]))
 

@@ -102,7 +102,8 @@ def step_count(duration: Any, dt: float, path: str = "duration") -> int:
         raise ConfigError(f"expected a positive number of seconds, got {duration!r}", path)
     ratio = duration / dt  # inf when the quotient overflows
     if not ratio <= MAX_STEPS + 0.5:
-        raise ConfigError(f"{duration:g} s at dt = {dt:g} s is {ratio:.4g} steps; at most "
+        count = f"{ratio:.4g}" if math.isfinite(ratio) else "over 1e308"
+        raise ConfigError(f"{duration:g} s at dt = {dt:g} s is {count} steps; at most "
                           f"{MAX_STEPS} are allowed", path)
     if ratio < 1.0 - 1e-9:
         raise ConfigError(f"{duration:g} s is shorter than one control period "
