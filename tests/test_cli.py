@@ -123,3 +123,17 @@ def test_compare_says_figures_only_when_it_writes_them(options, says_figures, tm
     last = capsys.readouterr().out.splitlines()[-1]
     assert last.startswith("results, comparison.md")
     assert (" and figures in " in last) is says_figures
+
+
+@pytest.mark.parametrize(("argv", "fragment"), [
+    (["run", "bluerov2_demo"], "uvms-qp run: error: the following arguments are required: --out"),
+    (["run", "x", "--out", "o", "--duration", "abc"],
+     "uvms-qp run: error: argument --duration: invalid float value: 'abc'"),
+    (["frob"], "uvms-qp: error: argument COMMAND: invalid choice: 'frob'"),
+])
+def test_argument_errors_are_one_line_and_exit_2(argv, fragment, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert info.value.code == 2
+    assert err.startswith(fragment) and err.count("\n") == 1 and "usage:" not in err

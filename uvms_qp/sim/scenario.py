@@ -312,12 +312,13 @@ class Scenario:
             raise InputError(f"stack: the function returned {type(check).__name__}, not a Stack")
         check.bind(model)
         known = [task.name for task in check.tasks]
-        ordered = sorted(events or [], key=lambda e: e.time)
-        for i, event in enumerate(ordered):
+        given = list(events or [])
+        for i, event in enumerate(given):
             if event.task not in known:
                 raise UnknownNameError("task", event.task, known)
             if not event.path:
-                ordered[i] = dataclasses.replace(event, path=f"events[{i}].update")
+                given[i] = dataclasses.replace(event, path=f"events[{i}].update")
+        ordered = sorted(given, key=lambda e: e.time)
         names = _check_scheme_names(list(schemes), "schemes")
         options = {
             key: _scheme_keywords(key, Table(dict(value), join("scheme_options", key)), names)

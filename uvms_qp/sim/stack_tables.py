@@ -52,7 +52,7 @@ class Event:
         time: When the event fires [s] (at the first step with ``t >= time``).
         task: Name of the task to update.
         update: Keyword arguments passed to the task's ``update``.
-        path: Field path of the event in the scenario (for messages).
+        path: Field path of the event's update (``events[0].update``), for messages.
     """
 
     time: float
