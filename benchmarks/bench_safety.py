@@ -22,7 +22,7 @@ from uvms_qp.sim.scenario import load_scenario
 
 def main(rounds: int = 3000) -> None:
     sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric)
+    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric)
     q = np.array(sc.q0)
     problems = []
     for k in range(50):

@@ -21,13 +21,15 @@ import argparse
 import sys
 from typing import Any
 
+from ._common import plain
+
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``bench`` sub-command to the ``uvms-qp`` parser."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "bench",
         help="benchmark solvers and schemes (scenarios, random UVMS problems, raw hierarchies)",
-        description=__doc__,
+        description=plain(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--sets", nargs="+", metavar="SET",

@@ -318,14 +318,14 @@ def compare(
         names = [n for n in names if n in schemes]
     runs = []
     for index, name in enumerate(names):
-        scenario = base.rebuild()
-        scheme = (scenario.make_controller() if name == "hqp"
-                  else build_scheme(name, scenario, f"schemes[{index}]"))
+        stack = base.build_stack()  # each run starts from fresh tasks, no event applied
+        scheme = (base.make_controller(stack=stack) if name == "hqp"
+                  else build_scheme(name, base, f"schemes[{index}]", stack=stack))
         recorder = _Recorder(scheme)
-        result = simulate(scenario, recorder, scheme_name=name, progress=progress)
+        result = simulate(base, recorder, stack=stack, scheme_name=name, progress=progress)
         if name != "hqp":
             result.solver = str(getattr(scheme, "solver_name", "closed-form"))
         metrics = dict(result.metrics())
-        metrics.update(extra_metrics(result, scenario.model))
+        metrics.update(extra_metrics(result, base.model))
         runs.append(SchemeRun(name, result, recorder.arrays(), metrics))
     return Comparison(base.name, base.description, runs)

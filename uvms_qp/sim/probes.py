@@ -24,6 +24,7 @@ from .._validation import FloatArray
 from ..tasks.manipulability import default_rows
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..stack import Stack
     from .scenario import Scenario
 
 
@@ -42,8 +43,8 @@ def _has_value(type_name: str) -> Any:
     return predicate
 
 
-def _find_task(scenario: Scenario, predicate: Any) -> Any:
-    for task in scenario.tasks():
+def _find_task(stack: Stack, predicate: Any) -> Any:
+    for task in stack.tasks:
         if predicate(task):
             return task
     return None
@@ -54,18 +55,19 @@ class Probes:
 
     Args:
         scenario: The scenario being run.
+        stack: The run's stack (its tasks give the target, the measures and the payload force).
         size: Number of states to record (steps + 1).
     """
 
-    def __init__(self, scenario: Scenario, size: int) -> None:
+    def __init__(self, scenario: Scenario, stack: Stack, size: int) -> None:
         model = scenario.model
         self.model = model
-        self.tracked = scenario.task(scenario.tracking) if scenario.tracking else None
+        self.tracked = stack.task(scenario.tracking) if scenario.tracking else None
         self.frame = str(getattr(self.tracked, "frame", "tool")) if self.tracked else "tool"
-        self.manipulability_task = _find_task(scenario, _has_value("manipulability"))
-        self.payload_task = _find_task(scenario, _has_value("payload_moment"))
+        self.manipulability_task = _find_task(stack, _has_value("manipulability"))
+        self.payload_task = _find_task(stack, _has_value("payload_moment"))
         alignment = _find_task(
-            scenario, lambda t: getattr(t, "type_name", "") == "current_alignment"
+            stack, lambda t: getattr(t, "type_name", "") == "current_alignment"
         )
         heading: float | None = None
         if alignment is not None and getattr(alignment, "heading", None) is not None:
