@@ -290,3 +290,72 @@ def sc_blend(
     if b_sm != 0.0:
         out = out + b_sm * _self_motion(J)
     return factor * out
+
+
+def singularity_crossings(
+    joints: Any,
+    times: Any,
+    d3: float = 1.0,
+    d5: float = 1.0,
+    shoulder_tolerance: float = 0.01,
+) -> list[tuple[float, str]]:
+    """Times at which a joint history of the 4-DOF arm passes through its singularities.
+
+    Nenchev and Tsumaki, Section 3, name two kinds: the extended/folded arm (``q4 = 0`` or
+    ``+/-pi``: ``sin q4`` changes sign; ``"extended"`` when ``cos q4 > 0``, else ``"folded"``) and
+    the shoulder singularity (the wrist centre on the Z axis: the term ``c`` of
+    :func:`shoulder_term` changes sign there, and the crossing counts when the wrist passes within
+    ``shoulder_tolerance`` of the axis, so a sign change of ``c`` away from the axis is not
+    reported). Crossing times are interpolated linearly between samples.
+
+    Args:
+        joints: (N, 4) joint angles [rad], one row per sample.
+        times: (N,) sample times [s], increasing.
+        d3: Upper-arm length [m].
+        d5: Forearm length [m].
+        shoulder_tolerance: Largest wrist distance from the Z axis at a shoulder crossing [m].
+
+    Returns:
+        ``[(t, kind), ...]`` in time order, kind ``"extended"``, ``"folded"`` or ``"shoulder"``.
+
+    Raises:
+        ShapeError: ``joints`` is not (N, 4) or ``times`` is not (N,).
+    """
+    q = np.asarray(joints, dtype=np.float64)
+    t = np.asarray(times, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != 4 or t.shape != (q.shape[0],):
+        raise ShapeError(
+            f"joints, times: expected shapes (N, 4) and (N,), got {q.shape} and {t.shape}"
+        )
+    d3, d5 = _links(d3, d5)
+    tol = as_scalar(shoulder_tolerance, "shoulder_tolerance", positive=True)
+    s4 = np.sin(q[:, 3])
+    c = np.array([shoulder_term(row, d3, d5) for row in q])
+    events: list[tuple[float, str]] = []
+    for i, j in _sign_changes(s4):
+        kind = "extended" if np.cos(q[i, 3]) > 0.0 else "folded"
+        events.append((_zero_time(t, s4, i, j), kind))
+    for i, j in _sign_changes(c):
+        radius = min(float(np.hypot(*sc_arm_position(q[k], d3, d5)[:2])) for k in range(i, j + 1))
+        if radius <= tol:
+            events.append((_zero_time(t, c, i, j), "shoulder"))
+    return sorted(events)
+
+
+def _sign_changes(values: FloatArray) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)`` of consecutive non-zero samples of opposite sign (zeros in between)."""
+    nonzero = np.flatnonzero(values != 0.0)
+    signs = np.sign(values[nonzero])
+    flips = np.flatnonzero(signs[:-1] != signs[1:])
+    return [(int(nonzero[f]), int(nonzero[f + 1])) for f in flips]
+
+
+def _zero_time(t: FloatArray, values: FloatArray, i: int, j: int) -> float:
+    """Time of the zero of ``values`` between samples ``i < j``.
+
+    The first exact zero sample between them, else linear interpolation between the two.
+    """
+    if j > i + 1:
+        return float(t[i + 1])
+    a, b = float(values[i]), float(values[j])
+    return float(t[i] + (t[j] - t[i]) * a / (a - b))
