@@ -19,7 +19,7 @@ PROJECTORS = ("weighted", "euclidean")
 def normalized_gradient(gradient: Any, tol: float = 1e-12) -> FloatArray:
     """Unit gradient ``grad h = grad H / ||grad H||_2``.
 
-    ``003_229789978cc4b235.txt, Eq. (11)``: keeps one objective from dominating the sum in
+    Wang et al. (2017), Eq. (11): keeps one objective from dominating the sum in
     Eq. (10). A gradient of norm below ``tol`` (a stationary point) returns zeros.
 
     Args:
@@ -48,8 +48,8 @@ def gradient_projection(
 ) -> FloatArray:
     """Projected gradient ``qdot = J_W^+ xdot + (I - J_W^+ J) (gain * grad h)``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (4)`` (Liegeois): a positive ``gain`` ascends ``h``, a
-    negative one descends it. ``003_229789978cc4b235.txt, Eq. (9)`` writes ``-lambda grad H``:
+    Soylu et al. (2007), Eq. (4) (Liegeois): a positive ``gain`` ascends ``h``, a
+    negative one descends it. Wang et al. (2017), Eq. (9) writes ``-lambda grad H``:
     pass ``gain = -lambda``. The projection never changes the task rate ``J qdot``.
 
     Args:

@@ -3,7 +3,7 @@
 The column-augmented Jacobian ``H = [J, -v_hat]`` of the PA-10-like positioning arm has a
 two-dimensional kernel spanned by the self-motion field ``f_sm`` (no q4 rate, no path rate) and the
 end-point field ``f_ep`` (no q3 rate, path rate ``S4``), both from signed minors
-(``002_1230892968c9c95c.txt, Section 2.1 and 3``). The scheme commands "natural motion" (Eq. 3)::
+(Nenchev and Tsumaki, Section 2.1 and 3). The scheme commands "natural motion" (Eq. 3)::
 
     dq_bar = b_sm f_sm(q) + b_ep f_ep(q, v_hat),     zeta = dq_bar[:4],   p_dot = dq_bar[4]
 
@@ -46,7 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 class NenchevSingularityConsistent(Scheme):
-    """SC natural motion of the 4-DOF positioning arm, ``002_1230892968c9c95c.txt, Eq. (3)``.
+    """SC natural motion of the 4-DOF positioning arm, Nenchev and Tsumaki, Eq. (3).
 
     Args:
         direction: Wrist-centre direction v_hat in the base (world) frame (paper: (1, 0, 0)).

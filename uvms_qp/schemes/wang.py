@@ -2,7 +2,7 @@
 
 Two schemes for a UVMS whose task is the tool position (3 rows, world frame):
 
-* :class:`WangPseudoinverse`, ``003_229789978cc4b235.txt, Eq. (6)``: ``zeta = J^+ xdot`` with the
+* :class:`WangPseudoinverse`, Wang et al. (2017), Eq. (6): ``zeta = J^+ xdot`` with the
   plain pseudoinverse (vehicle and arm treated alike). The closed-loop reference
   ``xdot = xdot_d + K_e e`` is used here too, so the cases differ only in the redundancy
   resolution.
@@ -49,7 +49,7 @@ _LIMIT_MARGIN = 1e-6
 
 
 class WangPseudoinverse(Scheme):
-    """Pseudoinverse redundancy resolution, ``003_229789978cc4b235.txt, Eq. (6)``.
+    """Pseudoinverse redundancy resolution, Wang et al. (2017), Eq. (6).
 
     Args:
         gain: K_e per axis or scalar [1/s] (paper: 50).
@@ -87,7 +87,7 @@ class WangPseudoinverse(Scheme):
 
 
 class WangFuzzyGradientProjection(WangPseudoinverse):
-    """Fuzzy multitask weighted gradient projection, ``003_229789978cc4b235.txt, Eq. (23)``.
+    """Fuzzy multitask weighted gradient projection, Wang et al. (2017), Eq. (23).
 
     Args:
         gain: K_e [1/s] (paper: 50).

@@ -209,12 +209,13 @@ def _nenchev(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
             top.plot(r.time_states, r.ee_position[:, i], style, label=axis)
         for i in range(r.joints.shape[1]):
             bottom.plot(r.time_states, np.degrees(r.joints[:, i]), label=f"q{i + 1}")
-        for t_cross, kind in singularity_crossings(r.joints, r.time_states, *PA10_LINKS):
+        for t_cross, kind in _distinct(singularity_crossings(r.joints, r.time_states,
+                                                             *PA10_LINKS)):
             for ax in (top, bottom):
                 ax.axvline(t_cross, color="r" if kind != "shoulder" else "m", linewidth=0.7,
                            linestyle="--")
-            top.annotate(f"{kind} {t_cross:.2f} s", (t_cross, top.get_ylim()[1]), fontsize=6,
-                         rotation=90, va="top", ha="right")
+            top.annotate(f"{kind} {t_cross:.2f} s", (t_cross, 0.98), fontsize=6, rotation=90,
+                         va="top", ha="right", xycoords=("data", "axes fraction"))
         top.set_title(run.name, fontsize=9)
         top.set_ylabel("end point (wrist centre) [m]")
         bottom.set_ylabel("joint angles [deg]")
@@ -222,10 +223,24 @@ def _nenchev(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
         for ax in (top, bottom):
             ax.grid(linewidth=0.3)
             ax.legend(fontsize=7, loc="lower left")
-    fig.suptitle(f"{comparison.scenario}: end-point position and joint angles "
-                 "(Nenchev and Tsumaki, Fig. 2/3; dashed lines: singularities crossed)",
-                 fontsize=10)
+    fig.suptitle(f"{comparison.scenario}: end point and joints (Nenchev and Tsumaki, Fig. 2/3)"
+                 "\ndashed: singularities crossed (a run that dwells at one: first crossing only)",
+                 fontsize=9)
     return [save(fig, directory / "paper002_end_point.png")]
+
+
+def _distinct(events: list[tuple[float, str]], gap: float = 0.1) -> list[tuple[float, str]]:
+    """Crossings without the repeats of one kind within ``gap`` [s] of the previous one.
+
+    A controller dwelling at a singularity (e.g. at the workspace boundary) dithers through it.
+    """
+    kept: list[tuple[float, str]] = []
+    last: dict[str, float] = {}
+    for t, kind in events:
+        if t - last.get(kind, -np.inf) >= gap:
+            kept.append((t, kind))
+        last[kind] = t
+    return kept
 
 
 # -- Wang et al. (2017) -------------------------------------------------------------------------
