@@ -4,14 +4,12 @@ Claims of Soylu et al. (2007), Sections 3 and 4.4, as numbers on the bundled sce
 ``paper000_quintic`` (set-up and chosen duration: docs/papers/000_soylu.md).
 """
 
-import copy
-
 import numpy as np
 import pytest
+from paper_scenarios import variant
 
 from uvms_qp.analytic import pinv, weighted_pinv
 from uvms_qp.sim.comparison import compare
-from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
 
 RHO_BAR = 1.3
 #: W of Eq. (17) and K_s of Eq. (16) in the scenario.
@@ -76,9 +74,7 @@ def test_vehicle_turns_under_both_schemes(comparison):
 
 
 def _with_dt(dt, duration):
-    data = copy.deepcopy(load_scenario("paper000_quintic").data)
-    data["dt"], data["duration"] = dt, duration
-    return scenario_from_dict(data, name=f"paper000_dt_{dt}")
+    return variant("paper000_quintic", dt=dt, duration=duration)
 
 
 def _hold_loop_gain(scenario):

@@ -5,15 +5,13 @@ Claims of dos Santos et al. (2006), Simulation Results, on the bundled scenarios
 ``paper001_circle_vehicle_first`` (the other order). See docs/papers/001_santos.md.
 """
 
-import copy
-
 import numpy as np
 import pytest
+from paper_scenarios import variant
 
 from uvms_qp.schemes import SantosKinematicConstraint, SantosTaskPriority
 from uvms_qp.sim.comparison import compare
 from uvms_qp.sim.runner import simulate
-from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
 
 CURRENT = 0.78
 #: Circle centre of the scenario [m] and radius [m].
@@ -45,9 +43,7 @@ def test_kinematic_constraint_keeps_the_vehicle_at_rest_and_aligned(circle):
 
 
 def _run(scheme_type, dt=0.1, **options):
-    data = copy.deepcopy(load_scenario("paper001_circle").data)
-    data["dt"] = dt
-    scenario = scenario_from_dict(data, name="paper001_variant")
+    scenario = variant("paper001_circle", dt=dt)
     scheme = scheme_type(**options).bind(scenario.model, scenario.dt)
     scheme.track(scenario.trajectories["circle"])
     return simulate(scenario, scheme, scheme_name=scheme.name)

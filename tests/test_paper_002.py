@@ -7,17 +7,14 @@ the text describes) and ``paper002_line_self_motion`` (run 2, b_sm = 1).
 See docs/papers/002_nenchev.md.
 """
 
-import copy
-
 import numpy as np
 import pytest
-from scheme_options import compare_with_scheme_options, scheme_options
+from paper_scenarios import compare_with_scheme_options, scheme_options, variant
 
 from uvms_qp.analytic import singularity_crossings
 from uvms_qp.schemes import NenchevSelfMotion
 from uvms_qp.sim.comparison import compare
 from uvms_qp.sim.runner import simulate
-from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
 
 REACH = 2.0  # d3 + d5 [m]
 #: First crossing of run 1 [s] ("after approx. 1 s"); natural motion repeats it every 2.16 s.
@@ -143,9 +140,7 @@ def test_run2_with_the_paper_order_sign_crosses_the_extended_arm_smoothly():
     """The convention of ``paper002_line_paper_order`` (both fields negated: b_ep = b_sm = -1)
     applied to run 2 still crosses the extended-arm singularity with bounded rates (at 1.41 s);
     negating b_ep alone would drive the self-motion field into its 1/c pole."""
-    data = copy.deepcopy(load_scenario("paper002_line_self_motion").data)
-    data["duration"] = 3.0
-    scenario = scenario_from_dict(data, name="run2_paper_order")
+    scenario = variant("paper002_line_self_motion", duration=3.0)
     scheme = NenchevSelfMotion(b_ep=-1.0, b_sm=-1.0).bind(scenario.model, scenario.dt)
     r = simulate(scenario, scheme, scheme_name=scheme.name)
     events = singularity_crossings(r.joints, r.time_states)

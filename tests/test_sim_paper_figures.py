@@ -1,13 +1,12 @@
 """The papers' own figures: one set per bundled paper model, written by every comparison."""
 
-import copy
-
 import pytest
+from paper_scenarios import variant
 
 from uvms_qp.sim.comparison import compare
 from uvms_qp.sim.comparison_figures import plot_comparison
 from uvms_qp.sim.paper_figures import plot_paper_figures
-from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
+from uvms_qp.sim.scenario import load_scenario
 
 FILES = {
     "paper000_quintic": ["paper000_configurations.png", "paper000_states.png",
@@ -21,11 +20,7 @@ FILES = {
 
 
 def _short(name, duration):
-    data = copy.deepcopy(load_scenario(name).data)
-    data["duration"] = duration
-    for key in ("phases", "events"):  # timed past the short run
-        data.pop(key, None)
-    return compare(scenario_from_dict(data, name=name))
+    return compare(variant(name, duration=duration))
 
 
 @pytest.mark.parametrize("name", sorted(FILES))
