@@ -327,7 +327,8 @@ def _wang(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
         for ax in axes[-1]:
             ax.set_xlabel("t [s]")
         fig.suptitle(f"{comparison.scenario}, {run.name} (Wang et al. 2017, Fig. 3/5/7 (a)-(h); "
-                     "solid desired, dashed planned)", fontsize=10)
+                     "solid desired, dashed planned)\nfuzzy rule base and arm mount: this "
+                     "library's own (the paper prints neither)", fontsize=10)
         paths.append(save(fig, directory / f"paper003_{run.name}.png"))
 
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
