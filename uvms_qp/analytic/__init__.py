@@ -23,6 +23,7 @@ from .davies import (
 )
 from .fuzzy import DEFAULT_RULES, FuzzyRules, FuzzyWeights, fuzzy_weights, memberships
 from .gradient_projection import (
+    PROJECTORS,
     gradient_projection,
     multi_objective_gradient_projection,
     normalized_gradient,
@@ -38,7 +39,13 @@ from .manipulability import (
     sign_switch,
 )
 from .motion_distribution import motion_distribution
-from .payload import payload_moment, payload_objective, payload_objective_gradient
+from .payload import (
+    payload_moment,
+    payload_objective,
+    payload_objective_gradient,
+    static_tilt,
+    vehicle_payload_moment,
+)
 from .screws import (
     planar_chain_points,
     planar_chain_screws,
@@ -60,6 +67,7 @@ from .singularity_consistent import (
     self_motion_field,
     shoulder_term,
     signed_minor_null_vector,
+    singularity_crossings,
 )
 from .task_priority import (
     closed_loop_reference,
@@ -72,6 +80,7 @@ from .task_priority import (
 __all__ = [
     "DEFAULT_RULES",
     "PPPS_NAMES",
+    "PROJECTORS",
     "FuzzyRules",
     "FuzzyWeights",
     "closed_loop_reference",
@@ -120,9 +129,12 @@ __all__ = [
     "shoulder_term",
     "sign_switch",
     "signed_minor_null_vector",
+    "singularity_crossings",
     "singularity_robust_task_priority",
     "skew",
     "sr_task_priority_closed_loop",
+    "static_tilt",
     "task_priority",
+    "vehicle_payload_moment",
     "weighted_pinv",
 ]

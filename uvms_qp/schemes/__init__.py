@@ -14,7 +14,8 @@ metric W, the current's heading, the payload force).
 | ``santos_sr_task_priority`` | 001, Eq. (28) |
 | ``nenchev_sc`` / ``nenchev_sc_self_motion`` | 002, Eq. (3) with b_sm = 0 / 1 |
 | ``wang_pseudoinverse`` | 003, Eq. (6) |
-| ``wang_fuzzy_gradient_projection`` | 003, Eq. (23) |
+| ``wang_fuzzy_gradient_projection`` | 003, Eq. (23), projector ``I - J_W^+ J`` |
+| ``wang_fuzzy_gradient_projection_euclidean`` | 003, Eq. (23), projector ``I - J^+ J`` |
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from .nenchev import NenchevSingularityConsistent
 from .santos import SantosKinematicConstraint, SantosTaskPriority
 from .scheme import Scheme
 from .soylu import SoyluDexterous, SoyluTaskPriority
-from .wang import WangFuzzyGradientProjection, WangPseudoinverse
+from .wang import WangEuclideanProjection, WangFuzzyGradientProjection, WangPseudoinverse
 
 
 class NenchevSelfMotion(NenchevSingularityConsistent):
@@ -62,6 +63,7 @@ SCHEME_TYPES: dict[str, type[Scheme]] = {
         NenchevSelfMotion,
         WangPseudoinverse,
         WangFuzzyGradientProjection,
+        WangEuclideanProjection,
     )
 }
 """Scenario scheme name -> scheme class (``"hqp"`` is the scenario's own stack)."""
@@ -134,6 +136,7 @@ __all__ = [
     "Scheme",
     "SoyluDexterous",
     "SoyluTaskPriority",
+    "WangEuclideanProjection",
     "WangFuzzyGradientProjection",
     "WangPseudoinverse",
     "build_scheme",

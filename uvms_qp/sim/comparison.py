@@ -58,6 +58,9 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("nan_steps", ""),
 )
 
+#: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).
+UNTRACKED_METRICS = ("ee_error_max", "ee_error_rms", "ee_error_final")
+
 #: Largest hard-row violation (units of the rows: [m/s], [rad/s], ...) a run may show before the
 #: table flags it as exceeding the hard bounds.
 BOUND_TOLERANCE = 1e-6
@@ -327,5 +330,9 @@ def compare(
             result.solver = str(getattr(scheme, "solver_name", "closed-form"))
         metrics = dict(result.metrics())
         metrics.update(extra_metrics(result, base.model))
+        if not getattr(scheme, "needs_trajectory", True):
+            # it follows no trajectory (e.g. natural motion): a tool error would be meaningless
+            for key in UNTRACKED_METRICS:
+                metrics.pop(key, None)
         runs.append(SchemeRun(name, result, recorder.arrays(), metrics))
     return Comparison(base.name, base.description, runs)

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._figures import output_dir, pyplot, save
+from .paper_figures import plot_paper_figures
 
 if TYPE_CHECKING:  # pragma: no cover
     from .comparison import Comparison
@@ -116,6 +117,7 @@ def plot_comparison(comparison: Comparison, model: Any, out_dir: str | Path) -> 
 
     if model.vehicle_kind in ("planar", "spatial"):
         paths.append(_snapshots(plt, comparison, model, directory / "configurations.png"))
+    paths.extend(plot_paper_figures(comparison, model, directory))
     return paths
 
 
