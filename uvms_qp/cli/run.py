@@ -19,6 +19,9 @@ from ._common import output_directory, scenario_command, writing_output
 def _options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solver", help="override the scenario's solver (e.g. cascade:osqp)")
     parser.add_argument("--duration", type=float, help="override the simulated time [s]")
+    parser.add_argument("--view", metavar="HTML",
+                        help="also write a 3-D animation of the run as one self-contained HTML "
+                             "file (needs plotly: pip install 'uvms-qp[view]')")
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -62,8 +65,11 @@ def run(args: argparse.Namespace) -> int:
     from ..sim.results import write_results
     from ..sim.runner import simulate
     from ..sim.scenario import load_scenario
+    from ..sim.view import INSTALL_HINT, plotly_available, write_view
 
     scenario = load_scenario(args.scenario)
+    if args.view and not plotly_available():
+        raise ConfigError(f"the 3-D view needs plotly: {INSTALL_HINT}", "--view")
     if args.duration is not None and not args.duration > 0.0:
         raise ConfigError(f"expected a positive number of seconds, got {args.duration}",
                           "--duration")
@@ -82,11 +88,19 @@ def run(args: argparse.Namespace) -> int:
             result.solver = args.solver
         with writing_output(args.out):
             path = write_results(result, args.out)
-            figures = [] if args.no_plots else plot_results(result, args.out)
+            figures = [] if args.no_plots else plot_results(result, args.out,
+                                                            progress=not args.quiet)
+        if args.view:
+            try:
+                view = write_view(scenario.model, result, args.view)
+            except OSError as exc:
+                raise ConfigError(f"cannot write {args.view!r}: {exc.strerror or exc}",
+                                  "--view") from None
     if not args.quiet:
         print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s in "
               f"{result.wall_time:.2f} s -> {path}"
-              + (f" and {len(figures)} figures" if figures else ""))
+              + (f" and {len(figures)} figures" if figures else "")
+              + (f"; 3-D view {view}" if args.view else ""))
         print(_summary(result.metrics()))
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
