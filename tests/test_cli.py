@@ -114,7 +114,7 @@ def test_a_multi_line_message_is_printed_on_one_line(monkeypatch, tmp_path, caps
 @pytest.mark.parametrize(("options", "says_figures"), [(["--no-plots"], False), ([], True)])
 def test_compare_says_figures_only_when_it_writes_them(options, says_figures, tmp_path, capsys,
                                                        monkeypatch):
-    monkeypatch.setattr("uvms_qp.sim.comparison_figures.plot_comparison", lambda *a: [])
+    monkeypatch.setattr("uvms_qp.sim.comparison_figures.plot_comparison", lambda *a, **k: [])
     scenario = tmp_path / "short.toml"
     body = resolve_scenario("paper001_circle").read_text().replace("duration = 10.0",
                                                                     "duration = 0.2")

@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         with writing_output(args.out):
             comparison.write(args.out)
             if not args.no_plots:
-                plot_comparison(comparison, scenario.model, args.out)
+                plot_comparison(comparison, scenario.model, args.out, progress=not args.quiet)
     if not args.quiet:
         _print_table(comparison)
         figures = "" if args.no_plots else " and figures"

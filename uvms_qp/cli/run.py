@@ -24,6 +24,9 @@ def _options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solver", help="override the scenario's solver (e.g. cascade:osqp)")
     parser.add_argument("--duration", type=float,
                         help="override the simulated time [s] (at least one control period)")
+    parser.add_argument("--view", metavar="HTML",
+                        help="also write a 3-D animation of the run as one self-contained HTML "
+                             "file (needs plotly: pip install 'uvms-qp[view]')")
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -66,11 +69,14 @@ def run(args: argparse.Namespace) -> int:
     from ..sim.results import write_results
     from ..sim.runner import simulate
     from ..sim.scenario import load_scenario
+    from ..sim.view import INSTALL_HINT, plotly_available, write_view
 
     register_model_paths(args)
     scenario = load_scenario(args.scenario)
     if args.duration is not None:
         scenario = scenario.with_duration(args.duration, "--duration")
+    if args.view and not plotly_available():
+        raise ConfigError(f"the 3-D view needs plotly: {INSTALL_HINT}", "--view")
     try:
         scheme = scenario.make_controller(args.solver) if args.solver else None
     except UnknownSolverError as exc:
@@ -81,12 +87,20 @@ def run(args: argparse.Namespace) -> int:
             result.solver = args.solver
         with writing_output(args.out):
             path = write_results(result, args.out)
-            figures = [] if args.no_plots else plot_results(result, args.out)
+            figures = [] if args.no_plots else plot_results(result, args.out,
+                                                            progress=not args.quiet)
+        if args.view:
+            try:
+                view = write_view(scenario.model, result, args.view)
+            except OSError as exc:
+                raise ConfigError(f"cannot write {args.view!r}: {exc.strerror or exc}",
+                                  "--view") from None
     if not args.quiet:
         simulated = result.steps * result.dt
         print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s ({simulated:g} s) in "
               f"{result.wall_time:.2f} s -> {path}"
-              + (f" and {len(figures)} figures" if figures else ""))
+              + (f" and {len(figures)} figures" if figures else "")
+              + (f"; 3-D view {view}" if args.view else ""))
         if abs(simulated - scenario.duration) > 1e-9 * scenario.duration:
             print(f"note: {scenario.duration:g} s is not a whole number of control periods; "
                   f"ran the nearest, {simulated:g} s")

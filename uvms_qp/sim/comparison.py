@@ -32,6 +32,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..errors import ConfigError
+from ._files import write_atomic
 
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
@@ -200,7 +201,11 @@ class Comparison:
         return "\n".join(lines)
 
     def write(self, out_dir: str | Path) -> list[Path]:
-        """Write every run's ``results.json`` and diagnostics, and the comparison table."""
+        """Write every run's ``results.json`` and diagnostics, and the comparison table.
+
+        Every file is written atomically (mode 0644); a path there that is a symbolic link is
+        replaced, not followed.
+        """
         from .results import write_results
 
         directory = Path(out_dir)
@@ -216,11 +221,10 @@ class Comparison:
                 "series": {k: _json_list(v) for k, v in run.info.items()},
                 "metrics": {k: _json_value(v) for k, v in run.metrics.items()},
             }
-            info_path.write_text(json.dumps(payload, allow_nan=False), encoding="utf-8")
+            write_atomic(info_path, json.dumps(payload, allow_nan=False))
             written.append(info_path)
         md = directory / "comparison.md"
-        md.write_text(f"# {self.scenario}\n\n{self.description}\n\n{self.markdown()}\n",
-                      encoding="utf-8")
+        write_atomic(md, f"# {self.scenario}\n\n{self.description}\n\n{self.markdown()}\n")
         table = {
             "scenario": self.scenario,
             "schemes": [run.name for run in self.runs],
@@ -230,7 +234,7 @@ class Comparison:
             "notes": self.notes(),
         }
         js = directory / "comparison.json"
-        js.write_text(json.dumps(table, allow_nan=False, indent=1), encoding="utf-8")
+        write_atomic(js, json.dumps(table, allow_nan=False, indent=1))
         return [*written, md, js]
 
 

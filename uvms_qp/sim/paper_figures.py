@@ -13,13 +13,14 @@ paper knows, laid out and oriented as in the paper:
 * ``wang_9dof``: ``paper003_<scheme>.png`` per run (Wang et al. 2017, Fig. 3, 5 and 7, panels
   (a)-(h)) and ``paper003_payload.png`` (the load's lever arms of every run).
 
-Planar models are drawn with x to the right and y up, as in the papers (the generic snapshots
-draw the NED plane from above, north up). A model not in the table gets no extra figure.
+Planar models are drawn with x to the right and y up, as in the papers. A model not in the table
+gets no extra figure.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import cache, partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,7 +28,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..analytic.singularity_consistent import singularity_crossings
-from ._figures import output_dir, pyplot, save
+from ._figures import Builder, output_dir, pyplot, write_figures
 
 if TYPE_CHECKING:  # pragma: no cover
     from .comparison import Comparison, SchemeRun
@@ -38,6 +39,19 @@ SNAPSHOTS = 7
 PA10_LINKS = (1.0, 1.0)
 
 
+def paper_figures(comparison: Comparison, model: Any) -> list[tuple[str, Builder]]:
+    """The paper figures of ``model`` as ``(file name, builder)`` pairs (none for other models).
+
+    Args:
+        comparison: The runs to draw.
+        model: The scenario's model; its name selects the paper.
+    """
+    figures = _PAPERS.get(getattr(model, "name", ""))
+    if figures is None or not comparison.runs:
+        return []
+    return figures(comparison, model)
+
+
 def plot_paper_figures(comparison: Comparison, model: Any, out_dir: str | Path) -> list[Path]:
     """Write the paper figures of ``model`` (none for other models); return their paths.
 
@@ -46,10 +60,7 @@ def plot_paper_figures(comparison: Comparison, model: Any, out_dir: str | Path) 
         model: The scenario's model; its name selects the paper.
         out_dir: Output directory (created if needed).
     """
-    draw = _PAPERS.get(getattr(model, "name", ""))
-    if draw is None or not comparison.runs:
-        return []
-    return draw(comparison, model, output_dir(out_dir))
+    return write_figures(paper_figures(comparison, model), output_dir(out_dir))
 
 
 # -- shared helpers -------------------------------------------------------------------------------
@@ -106,16 +117,23 @@ def _overlay(axes: Any, runs: list[SchemeRun], series: Callable[[SchemeRun], tup
 # -- Soylu et al. (2007) ------------------------------------------------------------------------
 
 
-def _soylu(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
-    plt = pyplot()
-    runs = comparison.runs
-    paths = [save(
-        _planar_snapshots(plt, comparison, model,
-                          f"{comparison.scenario}: configurations (Soylu et al. 2007, Fig. 3 "
-                          "and 6; vehicle red, arm blue, later darker)"),
-        directory / "paper000_configurations.png",
+def _soylu(comparison: Comparison, model: Any) -> list[tuple[str, Builder]]:
+    return [(name, partial(draw, comparison, model)) for name, draw in (
+        ("paper000_configurations.png", _soylu_configurations),
+        ("paper000_states.png", _soylu_states),
+        ("paper000_manipulability.png", _soylu_manipulability),
     )]
 
+
+def _soylu_configurations(comparison: Comparison, model: Any) -> Any:
+    return _planar_snapshots(pyplot(), comparison, model,
+                             f"{comparison.scenario}: configurations (Soylu et al. 2007, Fig. 3 "
+                             "and 6; vehicle red, arm blue, later darker)")
+
+
+def _soylu_states(comparison: Comparison, model: Any) -> Any:
+    plt = pyplot()
+    runs = comparison.runs
     fig, axes = plt.subplots(3, 2, figsize=(9, 6.5), sharex=True)
     _overlay(axes[:, 0], runs, lambda run: (run.result.time_states, run.result.eta),
              ["x_v [m]", "y_v [m]", "q_v [rad]"])
@@ -128,8 +146,12 @@ def _soylu(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
         ax.set_xlabel("t [s]")
     fig.suptitle(f"{comparison.scenario}: state histories (Soylu et al. 2007, Fig. 2 and 5)",
                  fontsize=10)
-    paths.append(save(fig, directory / "paper000_states.png"))
+    return fig
 
+
+def _soylu_manipulability(comparison: Comparison, model: Any) -> Any:
+    plt = pyplot()
+    runs = comparison.runs
     fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 3.4), sharey=True,
                              squeeze=False)
     for ax, run in zip(axes[0], runs, strict=True):
@@ -147,17 +169,20 @@ def _soylu(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
     axes[0, 0].set_ylabel("measure of manipulability rho [m^2]")
     fig.suptitle(f"{comparison.scenario}: manipulability (Soylu et al. 2007, Fig. 7)",
                  fontsize=10)
-    paths.append(save(fig, directory / "paper000_manipulability.png"))
-    return paths
+    return fig
 
 
 # -- dos Santos et al. (2006) -------------------------------------------------------------------
 
 
-def _santos(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
-    plt = pyplot()
-    runs = comparison.runs
+def _santos(comparison: Comparison, model: Any) -> list[tuple[str, Builder]]:
+    return [(name, partial(draw, comparison, model)) for name, draw in (
+        ("paper001_configurations.png", _santos_configurations),
+        ("paper001_states.png", _santos_states),
+    )]
 
+
+def _santos_configurations(comparison: Comparison, model: Any) -> Any:
     def current(ax: Any, run: SchemeRun) -> None:
         heading = run.result.heading
         if heading is None:
@@ -168,13 +193,14 @@ def _santos(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
         ax.text(x0 + 2.0 * np.cos(heading), y0 + 2.0 * np.sin(heading),
                 f" current {heading:.2f} rad", fontsize=7, color="c")
 
-    paths = [save(
-        _planar_snapshots(plt, comparison, model,
-                          f"{comparison.scenario}: configurations, circle and current "
-                          "(dos Santos et al. 2006, Fig. 7 and 8)", current),
-        directory / "paper001_configurations.png",
-    )]
+    return _planar_snapshots(pyplot(), comparison, model,
+                             f"{comparison.scenario}: configurations, circle and current "
+                             "(dos Santos et al. 2006, Fig. 7 and 8)", current)
 
+
+def _santos_states(comparison: Comparison, model: Any) -> Any:
+    plt = pyplot()
+    runs = comparison.runs
     nveh = int(model.n_vehicle)
     fig, axes = plt.subplots(3, 3, figsize=(11, 6.5), sharex=True)
     _overlay(axes[:, 0], runs, lambda run: (run.result.time_states, run.result.eta),
@@ -190,14 +216,17 @@ def _santos(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.suptitle(f"{comparison.scenario}: state histories (dos Santos et al. 2006)", fontsize=10)
-    paths.append(save(fig, directory / "paper001_states.png"))
-    return paths
+    return fig
 
 
 # -- Nenchev and Tsumaki ------------------------------------------------------------------------
 
 
-def _nenchev(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
+def _nenchev(comparison: Comparison, model: Any) -> list[tuple[str, Builder]]:
+    return [("paper002_end_point.png", partial(_nenchev_end_point, comparison, model))]
+
+
+def _nenchev_end_point(comparison: Comparison, model: Any) -> Any:
     plt = pyplot()
     runs = comparison.runs
     fig, axes = plt.subplots(2, len(runs), figsize=(4.6 * len(runs), 6), sharex="col",
@@ -226,7 +255,7 @@ def _nenchev(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
     fig.suptitle(f"{comparison.scenario}: end point and joints (Nenchev and Tsumaki, Fig. 2/3)"
                  "\ndashed: singularities crossed (a run that dwells at one: first crossing only)",
                  fontsize=9)
-    return [save(fig, directory / "paper002_end_point.png")]
+    return fig
 
 
 def _distinct(events: list[tuple[float, str]], gap: float = 0.1) -> list[tuple[float, str]]:
@@ -268,72 +297,88 @@ def _rate(values: FloatArray, t: FloatArray) -> FloatArray:
     return np.diff(values, axis=0) / np.diff(t)[:, None]
 
 
-def _wang(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
+def _wang(comparison: Comparison, model: Any) -> list[tuple[str, Builder]]:
+    @cache
+    def levers(name: str) -> FloatArray:
+        return payload_lever_arms(comparison.run(name).result, model)
+
+    figures: list[tuple[str, Builder]] = [
+        (f"paper003_{run.name}.png", partial(_wang_run, comparison, model, run, levers))
+        for run in comparison.runs
+    ]
+    figures.append(("paper003_payload.png", partial(_wang_payload, comparison, levers)))
+    return figures
+
+
+def _wang_run(comparison: Comparison, model: Any, run: SchemeRun,
+              levers: Callable[[str], FloatArray]) -> Any:
+    """Panels (a)-(h) of Wang et al. (2017), Fig. 3/5/7 for one run."""
     plt = pyplot()
-    paths = []
     nveh = int(model.n_vehicle)
     lower = np.degrees(np.asarray(model.joint_lower, dtype=np.float64))
     upper = np.degrees(np.asarray(model.joint_upper, dtype=np.float64))
-    levers = {run.name: payload_lever_arms(run.result, model) for run in comparison.runs}
-    for run in comparison.runs:
-        r = run.result
-        fig, axes = plt.subplots(4, 2, figsize=(11, 11), sharex=True)
-        (a, b), (c, d), (e, f), (g, h) = axes
-        desired_rate = _rate(r.target_position, r.time_states)
-        actual_rate = _rate(r.ee_position, r.time_states)
-        for i, axis in enumerate("xyz"):
-            line = a.plot(r.time_states, r.target_position[:, i], "-", label=f"{axis} desired")[0]
-            a.plot(r.time_states, r.ee_position[:, i], "--", color=line.get_color(),
-                   label=f"{axis} planned")
-            b.plot(r.time, desired_rate[:, i], "-", color=line.get_color(),
-                   label=f"{axis}' desired")
-            b.plot(r.time, actual_rate[:, i], "--", color=line.get_color(),
-                   label=f"{axis}' planned")
-        a.set_ylabel("(a) tool position [m]")
-        b.set_ylabel("(b) tool velocity [m/s]")
-        pose_labels = ("x", "y", "z", "phi", "theta", "psi")
-        for i in (0, 1, 2, 5):
-            c.plot(r.time_states, r.eta[:, i], label=f"{pose_labels[i]} [m or rad]")
-        c.set_ylabel("(c) vehicle pose")
-        for i in range(r.joints.shape[1]):
-            line = d.plot(r.time_states, np.degrees(r.joints[:, i]), label=f"q{i + 1}")[0]
-            for bound in (lower[i], upper[i]):
-                d.axhline(bound, color=line.get_color(), linestyle=":", linewidth=0.6)
-        d.set_ylabel("(d) joints [deg] (dotted: limits)")
-        for i in range(nveh):
-            e.plot(r.time, r.zeta[:, i], label=model.zeta_names[i])
-        e.set_ylabel("(e) vehicle rates [m/s, rad/s]")
-        for i in range(nveh, r.zeta.shape[1]):
-            f.plot(r.time, np.degrees(r.zeta[:, i]), label=model.zeta_names[i])
-        f.set_ylabel("(f) joint rates [deg/s]")
-        mom = r.manipulability / r.manipulability[0]
-        g.plot(r.time_states, mom, "b-", label="MOM / MOM(0)")
-        g.set_ylabel("(g) normalised MOM")
-        g2 = g.twinx()
-        lever = levers[run.name]
-        g2.plot(r.time_states, lever[:, 0], "r-", linewidth=0.8, label="Eq. 20 lever [m]")
-        g2.plot(r.time_states, lever[:, 1], "r--", linewidth=0.8,
-                label="nose-down moment per N [m]")
-        g2.legend(fontsize=6, loc="lower right")
-        for key in ("alpha_1", "alpha_2", "beta"):
-            if key in run.info:
-                h.plot(r.time, run.info[key], label=key)
-        h.set_ylabel("(h) fuzzy outputs")
-        h.set_ylim(-0.05, 1.05)
-        for ax in axes.flat:
-            ax.grid(linewidth=0.3)
-            if ax.get_legend_handles_labels()[0]:
-                ax.legend(fontsize=6, loc="upper right", ncol=2)
-        for ax in axes[-1]:
-            ax.set_xlabel("t [s]")
-        fig.suptitle(f"{comparison.scenario}, {run.name} (Wang et al. 2017, Fig. 3/5/7 (a)-(h); "
-                     "solid desired, dashed planned)\nfuzzy rule base and arm mount: this "
-                     "library's own (the paper prints neither)", fontsize=10)
-        paths.append(save(fig, directory / f"paper003_{run.name}.png"))
+    r = run.result
+    fig, axes = plt.subplots(4, 2, figsize=(11, 11), sharex=True)
+    (a, b), (c, d), (e, f), (g, h) = axes
+    desired_rate = _rate(r.target_position, r.time_states)
+    actual_rate = _rate(r.ee_position, r.time_states)
+    for i, axis in enumerate("xyz"):
+        line = a.plot(r.time_states, r.target_position[:, i], "-", label=f"{axis} desired")[0]
+        a.plot(r.time_states, r.ee_position[:, i], "--", color=line.get_color(),
+               label=f"{axis} planned")
+        b.plot(r.time, desired_rate[:, i], "-", color=line.get_color(),
+               label=f"{axis}' desired")
+        b.plot(r.time, actual_rate[:, i], "--", color=line.get_color(),
+               label=f"{axis}' planned")
+    a.set_ylabel("(a) tool position [m]")
+    b.set_ylabel("(b) tool velocity [m/s]")
+    pose_labels = ("x", "y", "z", "phi", "theta", "psi")
+    for i in (0, 1, 2, 5):
+        c.plot(r.time_states, r.eta[:, i], label=f"{pose_labels[i]} [m or rad]")
+    c.set_ylabel("(c) vehicle pose")
+    for i in range(r.joints.shape[1]):
+        line = d.plot(r.time_states, np.degrees(r.joints[:, i]), label=f"q{i + 1}")[0]
+        for bound in (lower[i], upper[i]):
+            d.axhline(bound, color=line.get_color(), linestyle=":", linewidth=0.6)
+    d.set_ylabel("(d) joints [deg] (dotted: limits)")
+    for i in range(nveh):
+        e.plot(r.time, r.zeta[:, i], label=model.zeta_names[i])
+    e.set_ylabel("(e) vehicle rates [m/s, rad/s]")
+    for i in range(nveh, r.zeta.shape[1]):
+        f.plot(r.time, np.degrees(r.zeta[:, i]), label=model.zeta_names[i])
+    f.set_ylabel("(f) joint rates [deg/s]")
+    mom = r.manipulability / r.manipulability[0]
+    g.plot(r.time_states, mom, "b-", label="MOM / MOM(0)")
+    g.set_ylabel("(g) normalised MOM")
+    g2 = g.twinx()
+    lever = levers(run.name)
+    g2.plot(r.time_states, lever[:, 0], "r-", linewidth=0.8, label="Eq. 20 lever [m]")
+    g2.plot(r.time_states, lever[:, 1], "r--", linewidth=0.8,
+            label="nose-down moment per N [m]")
+    g2.legend(fontsize=6, loc="lower right")
+    for key in ("alpha_1", "alpha_2", "beta"):
+        if key in run.info:
+            h.plot(r.time, run.info[key], label=key)
+    h.set_ylabel("(h) fuzzy outputs")
+    h.set_ylim(-0.05, 1.05)
+    for ax in axes.flat:
+        ax.grid(linewidth=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=6, loc="upper right", ncol=2)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle(f"{comparison.scenario}, {run.name} (Wang et al. 2017, Fig. 3/5/7 (a)-(h); "
+                 "solid desired, dashed planned)\nfuzzy rule base and arm mount: this "
+                 "library's own (the paper prints neither)", fontsize=10)
+    return fig
 
+
+def _wang_payload(comparison: Comparison, levers: Callable[[str], FloatArray]) -> Any:
+    """The load's lever arms of every run."""
+    plt = pyplot()
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for run in comparison.runs:
-        lever = levers[run.name]
+        lever = levers(run.name)
         top.plot(run.result.time_states, lever[:, 0], label=run.name)
         bottom.plot(run.result.time_states, lever[:, 1], label=run.name)
     top.set_ylabel("Eq. 20 lever sqrt(x_E^2 + y_E^2) [m]")
@@ -344,11 +389,10 @@ def _wang(comparison: Comparison, model: Any, directory: Path) -> list[Path]:
     top.legend(fontsize=7)
     top.set_title(f"{comparison.scenario}: lever arms of a load at the tool "
                   "(arm base frame; vehicle origin, nose-down positive)", fontsize=9)
-    paths.append(save(fig, directory / "paper003_payload.png"))
-    return paths
+    return fig
 
 
-_PAPERS: dict[str, Callable[[Any, Any, Path], list[Path]]] = {
+_PAPERS: dict[str, Callable[[Any, Any], list[tuple[str, Builder]]]] = {
     "soylu_planar": _soylu,
     "santos_planar": _santos,
     "nenchev_pa10_arm": _nenchev,

@@ -5,6 +5,8 @@
   (``000_7b5f597fe4e36aa4.txt, Eq. (18)``) of the tool's arm Jacobian in the arm-base frame,
   restricted to the rows a default :class:`~uvms_qp.tasks.ManipulabilityTask` uses (``x, y`` for
   planar vehicles, whose ``z`` row is zero; ``x, y, z`` otherwise).
+  Its unit (the task's, else ``m^k`` for k position rows) and, for a task in mode ``"floor"``,
+  the floor at each state.
 - Payload moment: ``M = (x_E^2 + y_E^2) F`` with ``(x_E, y_E)`` the tool position in the arm-base
   frame [m] and ``F`` the payload force [N] currently set on the payload task
   (``003_229789978cc4b235.txt, Eq. (20)``; [N m^2] as in the paper), through the task's
@@ -76,6 +78,12 @@ class Probes:
             heading = scenario.current.heading
         self.heading = heading
         self.manipulability_rows = default_rows(model)
+        task = self.manipulability_task
+        rows = len(self.manipulability_rows)
+        self.manipulability_unit = str(getattr(task, "error_unit", "")) if task else (
+            "m" if rows == 1 else f"m^{rows}")
+        has_floor = task is not None and getattr(task, "mode", "") == "floor"
+        self.manipulability_floor = np.full(size, np.nan) if has_floor else None
         self.has_yaw = getattr(model, "vehicle_kind", "fixed") != "fixed"
         self.eta = np.zeros((size, int(model.eta_size)))
         self.joints = np.zeros((size, int(model.n_joints)))
@@ -104,6 +112,8 @@ class Probes:
                     self.target_position[k] = position
         if self.manipulability_task is not None:
             self.manipulability[k] = float(self.manipulability_task.compute_value(state)[0])
+            if self.manipulability_floor is not None:
+                self.manipulability_floor[k] = self.manipulability_task.minimum
         else:
             J = state.arm_jacobian("tool")[self.manipulability_rows]
             self.manipulability[k] = yoshikawa(J)
@@ -127,6 +137,8 @@ class Probes:
         }
         if self.has_yaw and self.eta.shape[1]:
             data["yaw"] = self.eta[:, -1].copy()
+        if self.manipulability_floor is not None:
+            data["manipulability_floor"] = self.manipulability_floor
         if self.payload_moment is not None:
             data["payload_moment"] = self.payload_moment
             data["payload_objective"] = self.payload_objective

@@ -28,6 +28,7 @@ from .._validation import FloatArray
 from ..safety import STAGES
 from ..stack import Stack
 from .probes import Probes
+from .units import joint_units, zeta_units
 
 if TYPE_CHECKING:  # pragma: no cover
     from .scenario import Scenario
@@ -87,6 +88,11 @@ class SimulationResult:
         clipped: Amount the controller's final saturation removed from each command (N,)
             [m/s, rad/s] (0 for schemes that do not report it).
         deadline_missed: Whether each step overran the controller's ``deadline`` (N,).
+        zeta_units: Unit of each entry of zeta (:func:`uvms_qp.sim.units.zeta_units`).
+        joint_units: Unit of each joint position (``"rad"`` or ``"m"``).
+        manipulability_unit: Unit of ``manipulability`` (``"m^k"`` for k position rows).
+        manipulability_floor: Floor of the manipulability task per state (N+1,) (NaN while
+            none), or None without a floor task.
     """
 
     scenario: str
@@ -131,6 +137,10 @@ class SimulationResult:
     stage: list[str] = field(default_factory=list)
     clipped: FloatArray = field(default_factory=lambda: np.zeros(0))
     deadline_missed: list[bool] = field(default_factory=list)
+    zeta_units: tuple[str, ...] = ()
+    joint_units: tuple[str, ...] = ()
+    manipulability_unit: str = ""
+    manipulability_floor: FloatArray | None = None
 
     def metrics(self) -> dict[str, Any]:
         """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`) and the fallback ones.
@@ -392,4 +402,8 @@ def simulate(
         stage=stage,
         clipped=clipped,
         deadline_missed=missed,
+        zeta_units=zeta_units(model),
+        joint_units=joint_units(model),
+        manipulability_unit=probes.manipulability_unit,
+        manipulability_floor=data.get("manipulability_floor"),
     )
