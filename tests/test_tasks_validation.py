@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from uvms_qp.analytic import LIMIT_CLEARANCE, joint_limit_gradient
 from uvms_qp.errors import InputError, ShapeError, UnknownFrameError, UnknownJointError
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
@@ -19,7 +20,6 @@ from uvms_qp.tasks import (
     StationKeepingTask,
     VehicleAttitudeTask,
     VehicleMotionTask,
-    shaping_function,
 )
 
 
@@ -151,14 +151,6 @@ def test_current_alignment_wraps_the_error(rov):
     assert task.heading == pytest.approx(np.pi / 2)
 
 
-def test_shaping_function_end_points():
-    assert shaping_function(1.3, 1.3) == 0.0
-    assert shaping_function(2.0, 1.3) == 0.0
-    assert shaping_function(0.64, 1.3) == 1.0
-    mid = shaping_function(0.975, 1.3)
-    assert mid == pytest.approx(0.5)
-
-
 def test_shaping_sign_switch(rov):
     """Eq. (21): the gradient term acts only while w is not increasing."""
     task = ManipulabilityTask(mode="shaping", threshold=10.0, gain=1.0).bind(rov)
@@ -206,14 +198,12 @@ def test_stack_bind_error_carries_location(rov):
 
 def test_joint_limit_damping_weights_follow_eq17(rov):
     """Row weights 1 + |dH/dq_i| (the inverse of Eq. (17)'s w_i), refreshed every evaluation."""
-    from uvms_qp.tasks import joint_limit_index
-
     task = JointLimitTask(mode="damping", strength=[10.0, 6.0, 10.0, 10.0], weight=2.0).bind(rov)
     joints = np.array([0.1, 1.9, 3.3, 3.1])  # axis_e and axis_c near a limit
     state = rov.state(rov.configuration(np.zeros(6), joints))
     rows = task.rows(state)
-    _, grad = joint_limit_index(joints, rov.joint_lower, rov.joint_upper,
-                                np.array([10.0, 6.0, 10.0, 10.0]))
+    grad = joint_limit_gradient(joints, rov.joint_lower, rov.joint_upper,
+                                [10.0, 6.0, 10.0, 10.0], clearance=LIMIT_CLEARANCE)
     np.testing.assert_allclose(rows.weights, 2.0 * (1.0 + np.abs(grad)))
     np.testing.assert_allclose(rows.lower, 0.0)
     assert rows.weights[0] > 10 * rows.weights[1]  # near-limit joint is the expensive one

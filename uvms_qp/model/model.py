@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._validation import as_scalar, as_vector
+from .._validation import as_array, as_scalar, as_vector
 from ..errors import (
     InputError,
     ModelError,
@@ -76,8 +76,8 @@ class Model:
         source: Where the model comes from (paper, file).
         pin_model: The underlying Pinocchio model.
 
-    A model owns one Pinocchio ``Data`` buffer shared by the states it creates (see
-    :class:`~uvms_qp.model.state.State`); it is not thread-safe.
+    A model keeps a small pool of Pinocchio ``Data`` buffers that its states borrow for their
+    lifetime (see :class:`~uvms_qp.model.state.State`).
     """
 
     def __init__(
@@ -134,12 +134,11 @@ class Model:
             placement = parent.placement * to_se3(tool_offset)
             tree.addFrame(pin.Frame("tool", parent.parentJoint, fparent, placement, op))
         self.pin_model: pin.Model = full
-        self._data = full.createData()
-        self._owner: object = None  # the State whose kinematics are in _data
+        # Pinocchio buffers lent to states (State takes one and gives it back when collected)
+        self._data_pool: list[Any] = []
         # the bare arm (root = arm_base) gives the arm-only Jacobian in arm_base axes directly
         self._arm_model: pin.Model = arm
-        self._arm_data = arm.createData()
-        self._arm_owner: object = None
+        self._arm_pool: list[Any] = []
 
         self.nq = int(full.nq)
         n_pin = int(full.nv)
@@ -155,12 +154,14 @@ class Model:
         self._columns = np.array(columns, dtype=np.intp)
         # None = zeta is Pinocchio's whole velocity (no column selection on the hot path)
         self._select: np.ndarray | None = None if len(columns) == n_pin else self._columns
-        # vehicle_pose_jacobian: actuated columns of the vehicle block (None: all of them)
+        # vehicle_pose_jacobian: where the entries of J(eta) with an actuated column go in the
+        # (eta_size, nv) matrix, and which entries those are (None: all of them)
         act = list(vehicle.actuated_indices)
-        self._eta_columns: list[int] | None = None if act == list(range(vehicle.nv)) else act
-        # flat positions of the (eta_size, nv_vehicle) block inside the (eta_size, nv) matrix
-        self._eta_block = np.array([r * self.nv + c for r in range(vehicle.eta_size)
-                                    for c in range(vehicle.nv)], dtype=np.intp)
+        pattern = vehicle.pose_jacobian_pattern
+        kept = [i for i, (_, c) in enumerate(pattern) if c in act]
+        self._eta_dst = np.array([pattern[i][0] * self.nv + act.index(pattern[i][1])
+                                  for i in kept], dtype=np.intp)
+        self._eta_src: list[int] | None = None if len(kept) == len(pattern) else kept
 
         self.frames: tuple[str, ...] = STANDARD_FRAMES + tuple(
             f for f in arm_frames if f not in STANDARD_FRAMES
@@ -372,13 +373,8 @@ class Model:
             NonFiniteError: ``q`` holds NaN or inf.
             InputError: the vehicle orientation is far from unit norm.
         """
-        if type(q) is np.ndarray and q.dtype is _F64:
-            q = q.copy()  # fast path for the control loop
-        else:
-            try:
-                q = np.array(q, dtype=np.float64)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"q: expected numbers, got {type(q).__name__}") from exc
+        # a float64 array (the control loop) is copied; anything else must be real numbers
+        q = q.copy() if type(q) is np.ndarray and q.dtype is _F64 else np.array(as_array(q, "q"))
         if q.shape != (self.nq,):
             raise ShapeError(
                 f"q: expected shape ({self.nq},) for model {self.name!r} "
