@@ -162,3 +162,19 @@ def test_joint_position_bounds_intersect_a_filled_box(rov, joints):
         np.testing.assert_array_equal(lower, ref_lo)
         np.testing.assert_array_equal(upper, ref_hi)
         assert np.all(lower <= 0.0) and np.all(upper >= 0.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"upper": True}, r"linear_inequality\.upper: expected real numbers, got booleans"),
+        ({"lower": [False]}, r"linear_inequality\.lower: expected real numbers, got booleans"),
+        ({"A_row": ["1"] * 10}, r"linear_inequality\.A: expected real numbers, got strings"),
+        ({"A_row": [1j] * 10}, r"linear_inequality\.A: expected real numbers, got complex"),
+    ],
+)
+def test_linear_inequality_takes_real_numbers_only(kwargs, match):
+    """``upper=True`` used to become 1.0 and a complex row lost its imaginary part."""
+    row = kwargs.pop("A_row", [1.0] * 10)
+    with pytest.raises(InputError, match=match):
+        LinearInequality(A=[row], **kwargs)

@@ -30,7 +30,7 @@ from ..errors import (
 from .dh import build_dh_arm
 from .state import State
 from .transforms import as_transform, to_se3
-from .urdf import load_urdf_arm
+from .urdf import check_path, load_urdf_arm
 from .vehicle import ETA_NAMES, Vehicle, check_joint_names, resolve_vehicle
 
 FloatArray = NDArray[np.float64]
@@ -41,6 +41,19 @@ STANDARD_FRAMES: tuple[str, ...] = ("world", "vehicle", "arm_base", "tool")
 QUATERNION_TOLERANCE = 1e-3
 _VEHICLE_JOINT = "vehicle_joint"
 _F64 = np.dtype(np.float64)
+
+
+def _unique_frame_names(model: pin.Model) -> None:
+    """Rename joint frames that share a link's name (legal in URDF; ambiguous to Pinocchio).
+
+    Links keep their names (they are the model's public frames); a joint frame becomes
+    ``"<name>:joint"``. The joint itself keeps its name.
+    """
+    bodies = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    for i, frame in enumerate(model.frames):
+        if frame.type != pin.FrameType.BODY and frame.name in bodies:
+            frame.name = f"{frame.name}:joint"
+            model.frames[i] = frame
 
 
 def _limits(value: Any, default: FloatArray, name: str, n: int) -> FloatArray:
@@ -115,6 +128,7 @@ class Model:
         if clash:
             raise ModelError(f"model {self.name!r}: arm names {clash} are reserved")
 
+        _unique_frame_names(arm)
         base = pin.Model()
         base.name = self.name
         joint = vehicle.pin_joint()
@@ -303,10 +317,14 @@ class Model:
             source: Free text naming where the numbers come from.
 
         Raises:
-            ModelFileError: the file is missing or does not parse.
-            ModelError: unsupported joints, ambiguous tool.
+            InputError: ``path`` is not a path.
+            ModelFileError: the file is missing, too large, does not parse, or an element is
+                malformed (the message names it; see :mod:`uvms_qp.model.urdf`).
+            ModelError: unsupported joints (types, mimic), no moving joint, too many joints or
+                links, inconsistent limits, ambiguous tool.
             UnknownFrameError: ``tool`` is not a link of the URDF.
         """
+        path = check_path(path)
         arm = load_urdf_arm(path)
         if tool is None:
             if len(arm.leaves) != 1:
