@@ -139,7 +139,8 @@ def _outside_states(model, n=10, seed=11):
     return out
 
 
-@pytest.mark.parametrize("joints", [None, ["axis_d", "axis_b"]])
+@pytest.mark.parametrize("joints", [None, ["axis_d", "axis_b"],
+                                    ["axis_b", "axis_c", "axis_d", "axis_e"]])
 def test_joint_position_bounds_intersect_a_filled_box(rov, joints):
     """``max(box, min(band, 0))`` / ``min(box, max(band, 0))``, inside and outside the limits."""
     con = JointPositionBounds(gain=0.7, margin=0.02, joints=joints).bind(rov)

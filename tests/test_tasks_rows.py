@@ -296,6 +296,9 @@ CASES = {
     "payload_normalized": lambda m: PayloadMomentTask(force=10.0, normalize=True),
     "payload_bound": lambda m: PayloadMomentTask(mode="bound", force=5.0, maximum=0.3),
     "posture": lambda m: PostureTask(gain=0.2),
+    "posture_reversed": lambda m: PostureTask(joints=list(reversed(m.joint_names)), gain=0.4),
+    "jl_reversed": lambda m: JointLimitTask(mode="margin", joints=list(reversed(m.joint_names)),
+                                            margin=0.05),
     "posture_subset": lambda m: PostureTask(
         reference="middle", joints=[m.joint_names[-1], m.joint_names[0]], gain=[0.1, 0.3]),
     "station_hold": lambda m: StationKeepingTask(gain=1.0),

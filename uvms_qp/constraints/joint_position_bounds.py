@@ -49,7 +49,7 @@ class JointPositionBounds(Constraint):
         self.margin = as_scalar(margin, f"{self.name}.margin", nonnegative=True)
         self.joints = check_joint_list(joints, f"{self.name}.joints")
         self._cols = np.zeros(0, dtype=int)
-        self._idx = np.zeros(0, dtype=int)
+        self._idx: Any = None  # constrained joints (None: all of them)
         self._lo_list: list[float] = []
         self._hi_list: list[float] = []
 
@@ -62,7 +62,9 @@ class JointPositionBounds(Constraint):
             j = int(idx[finite][np.flatnonzero(lo[finite] > hi[finite])[0]])
             raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
                              f"limits of joint {model.joint_names[j]!r}")
-        self._idx = compact_index(idx[finite])
+        kept = idx[finite]
+        self._idx = (None if kept.tolist() == list(range(model.n_joints))
+                     else compact_index(kept))
         self._cols = compact_index(model.n_vehicle + idx[finite])
         self._lo_list, self._hi_list = lo[finite].tolist(), hi[finite].tolist()
         return 0
@@ -75,11 +77,11 @@ class JointPositionBounds(Constraint):
         """
         k = self.gain / dt
         cols = self._cols
+        q = state.joints if self._idx is None else state.joints[self._idx]
         new_lo = []
         new_hi = []
-        for a, b, x, lo, hi in zip(self._lo_list, self._hi_list,
-                                   state.joints[self._idx].tolist(), lower[cols].tolist(),
-                                   upper[cols].tolist(), strict=True):
+        for a, b, x, lo, hi in zip(self._lo_list, self._hi_list, q.tolist(),
+                                   lower[cols].tolist(), upper[cols].tolist(), strict=True):
             v = (a - x) * k  # [rad/s]; a joint outside its band may stay or return
             if v > 0.0:
                 v = 0.0

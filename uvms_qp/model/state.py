@@ -226,7 +226,9 @@ class State:
                 J = J[:, model._select]
             J.setflags(write=False)
             self._jacobians[key] = J
-        return J if rows == "twist" else _rows(J, rows)
+        if rows == "twist":
+            return J
+        return J[:3] if rows == "position" else _rows(J, rows)
 
     # --- the bare arm ------------------------------------------------------------------
 

@@ -9,11 +9,13 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import wrap_angle
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
+
+
+_TWO_PI = 2.0 * math.pi
 
 
 class CurrentAlignmentTask(ErrorTask):
@@ -79,7 +81,7 @@ class CurrentAlignmentTask(ErrorTask):
             raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
                              "direction=, or call update(heading=...)")
         row = self._row
-        e = wrap_angle(heading + self.offset - state.eta.item(row.start))
+        e = (heading + self.offset - state.eta.item(row.start) + math.pi) % _TWO_PI - math.pi
         return state.vehicle_pose_jacobian()[row], np.array((e,)), None
 
     def updatable(self) -> tuple[str, ...]:

@@ -124,7 +124,7 @@ class JointLimitTask(Task):
             raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
                              f"limits of joint {model.joint_names[idx[j]]!r}")
         self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
-        self._jsel = compact_index(idx)
+        self._jsel = None if idx.tolist() == list(range(model.n_joints)) else compact_index(idx)
         self.error_unit = "rad" if self.mode == "margin" else "1"  # distance or index H
         self._table = limit_table(lo, hi, C, LIMIT_CLEARANCE)
         self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
@@ -150,7 +150,8 @@ class JointLimitTask(Task):
         Distances to a limit closer than 1 % of the joint's range count as 1 % (see
         :mod:`uvms_qp.analytic.joint_limits`).
         """
-        H, grad = index_and_gradient(state.joints[self._jsel].tolist(), self._table)
+        q = state.joints if self._jsel is None else state.joints[self._jsel]
+        H, grad = index_and_gradient(q.tolist(), self._table)
         return H, np.array(grad)
 
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
@@ -158,7 +159,7 @@ class JointLimitTask(Task):
 
         Per joint in plain floats (a handful of joints; the constants are prepared at bind).
         """
-        q = state.joints[self._jsel].tolist()
+        q = (state.joints if self._jsel is None else state.joints[self._jsel]).tolist()
         if self.mode == "margin":
             k = self.gain
             lower = []
@@ -178,7 +179,7 @@ class JointLimitTask(Task):
         self.last_error = np.array((H,))
         if self.mode == "damping":
             # a new array every tick: the controller refreshes weights it has not seen
-            self._row_weights = np.array([self.weight * (1.0 + abs(x)) for x in g])
+            self.row_weights = np.array([self.weight * (1.0 + abs(x)) for x in g])
             return self._A, 0.0, 0.0
         scale = -self.gain
         if self.normalize:

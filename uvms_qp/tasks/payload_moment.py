@@ -112,7 +112,10 @@ class PayloadMomentTask(Task):
         F = self.force
         a, b = 2.0 * F * x, 2.0 * F * y
         rx, ry = state.arm_jacobian(self.frame)[:2].tolist()
-        return (x * x + y * y) * F, [a * u + b * v for u, v in zip(rx, ry, strict=True)]
+        grad = []
+        for u, v in zip(rx, ry, strict=True):
+            grad.append(a * u + b * v)
+        return (x * x + y * y) * F, grad
 
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
         """The reduce rows or the bound row (see the class docstring)."""

@@ -69,7 +69,7 @@ class PostureTask(ErrorTask):
                 raise InputError(f"{self.name}: reference='middle' needs finite joint limits")
             self._posture_arg = 0.5 * (lo + hi)
         self._idx = idx
-        self._jsel = compact_index(idx)
+        self._jsel = None if idx.tolist() == list(range(model.n_joints)) else compact_index(idx)
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
         self._A.setflags(write=False)
@@ -86,7 +86,7 @@ class PostureTask(ErrorTask):
 
     def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
         """``(S, q_ref - q, None)`` on the selected joints [rad] (``S`` selects their columns)."""
-        q = state.joints[self._jsel]
+        q = state.joints if self._jsel is None else state.joints[self._jsel]
         if self._q_ref is None:
             self._set_reference(q)
         return self._A, self._q_ref - q, None  # type: ignore[operator]

@@ -77,6 +77,8 @@ class Task(ABC):
         dim: Number of rows (known after :meth:`bind`).
         last_error: The task error (error tasks) or objective value at the last evaluation
             [error_unit], a new array every evaluation; None before the first one.
+        row_weights: Per-row weights (dim,), task weight included; a new array whenever they
+            change (so a consumer re-reads them only then).
     """
 
     type_name: ClassVar[str] = "task"
@@ -88,7 +90,7 @@ class Task(ABC):
         self.weight = as_scalar(weight, f"{self.name}.weight", positive=True)
         self.model: Model | None = None
         self.dim = 0
-        self._row_weights: FloatArray = np.zeros(0)
+        self.row_weights: FloatArray = np.zeros(0)
         self.last_error: FloatArray | None = None
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
@@ -117,7 +119,7 @@ class Task(ABC):
         dim = self._bind(model)
         self.model = model
         self.dim = int(dim)
-        self._row_weights = np.full(self.dim, self.weight)
+        self.row_weights = np.full(self.dim, self.weight)
         self._update_row_weights()
         return self
 
@@ -149,11 +151,6 @@ class Task(ABC):
     def equality_rows(self) -> bool:
         """True when every row is an equality (tasks with inequality rows override this)."""
         return True
-
-    @property
-    def row_weights(self) -> FloatArray:
-        """Per-row weights (dim,), task weight included."""
-        return self._row_weights
 
     # ----------------------------------------------------------------------------------- evaluate
     @abstractmethod
@@ -188,7 +185,7 @@ class Task(ABC):
         lower = np.empty(self.dim)
         upper = np.empty(self.dim)
         self.fill(state, t, A, lower, upper)
-        return Rows(A, lower, upper, self._row_weights.copy(), self.name)
+        return Rows(A, lower, upper, self.row_weights.copy(), self.name)
 
     def residual(self, state: State, zeta: Any, t: float = 0.0) -> float:
         """Norm of the row violation at ``zeta`` [rate_unit]: distance of ``A zeta`` to its band."""
@@ -230,7 +227,7 @@ class Task(ABC):
         if key == "weight":
             self.weight = as_scalar(value, f"{self.name}.weight", positive=True)
             if self.model is not None:
-                self._row_weights = np.full(self.dim, self.weight)
+                self.row_weights = np.full(self.dim, self.weight)
                 self._update_row_weights()
         else:  # pragma: no cover - guarded by update()
             raise InputError(f"{self.name}.update: cannot update {key!r}")

@@ -96,7 +96,7 @@ class VehicleMotionTask(Task):
         if model is None:
             return
         if self.include_arm:
-            self._row_weights = self.weight * motion_distribution_weights(model, self.beta,
+            self.row_weights = self.weight * motion_distribution_weights(model, self.beta,
                                                                           self.w_max)
 
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, float, float]:
