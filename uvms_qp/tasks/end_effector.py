@@ -356,7 +356,8 @@ class EndEffectorTask(ErrorTask):
             self._capture(state)
         frame = self.frame
         if self._simple:  # world target, every position axis
-            return state.jacobian(frame, "position"), self._p_d - state.position(frame), self._v_d
+            e = self._p_d - state.position(frame)  # type: ignore[operator]
+            return state.jacobian(frame, "position"), e, self._v_d
         J = state.jacobian(frame)
         if self.reference == "world":
             if self.mode == "position":
@@ -415,8 +416,8 @@ class EndEffectorTask(ErrorTask):
             J_target = J_r[:3] - _skew(p_d - p_r) @ J_r[3:]  # type: ignore[operator]
         if self.mode == "position":
             return J[:3] - J_target, p_d - state.position(self.frame), v_d  # type: ignore[operator]
-        rows, e, ff = self._pose_rows(J, state.pose(self.frame), p_d, R_r @ self._R_d, v_d,
-                                      w_d, J_r)
+        rows, e, ff = self._pose_rows(J, state.pose(self.frame), p_d,
+                                      R_r @ self._R_d, v_d, w_d, J_r)  # type: ignore[operator]
         if self._need_p:
             rows[:3] -= J_target
         return rows, e, ff

@@ -328,7 +328,8 @@ class ManipulabilityTask(Task):
 
     def shaping_factor(self, state: State) -> float:
         """``k(w)`` of :func:`~uvms_qp.analytic.shaping_function` at ``state``."""
-        return shaping_function(self._value(state)[0], self.threshold)  # type: ignore[no-any-return]
+        k: float = shaping_function(self._value(state)[0], self.threshold)  # type: ignore[arg-type]
+        return k
 
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
         """The rows of the selected mode (see the class docstring)."""

@@ -280,8 +280,8 @@ class ErrorTask(Task):
         feed-forward rate ``x_dot_d`` [rate_unit], or None for zero.
         """
 
-    @final
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,  # type: ignore[misc]
+    @final  # type: ignore[misc]  # the error tasks' one fill, final below ErrorTask
+    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
         """Write ``J zeta = x_dot_d + K e`` (equality rows) into the buffers."""
         J, e, ff = self.error_rows(state, t)
