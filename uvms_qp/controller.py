@@ -668,7 +668,7 @@ class Controller:
             level_names=self.level_names, stage=stage, clipped=clipped, deadline_missed=missed,
             attempts=attempts, _task_names=self._task_names,
             _rate_units=self._rate_units, _error_units=self._error_units, _residual_sq=sq,
-            _errors=tuple(task._last_error for task in self._tasks), _hard_rows_violation=hard_v,
+            _errors=tuple(task.last_error for task in self._tasks), _hard_rows_violation=hard_v,
             _level_sizes=self._level_sizes)
 
     def _inplace_result(self, result: StackedResult, t: float, start: float) -> StepResult:
@@ -693,7 +693,7 @@ class Controller:
             deadline_missed=deadline is not None and elapsed > deadline,
             _task_names=self._task_names, _rate_units=self._rate_units,
             _error_units=self._error_units, _residual_sq=sq,
-            _errors=tuple(task._last_error for task in self._tasks),
+            _errors=tuple(task.last_error for task in self._tasks),
             _hard_rows_violation=result.hard_violation, _level_sizes=self._level_sizes)
 
     def _zero_command(self) -> FloatArray:

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validation import FloatArray, as_matrix, as_vector, check_bounds_order
+from ._validation import FloatArray, as_array, as_matrix, as_vector, check_bounds_order
 from .errors import InputError
 
 
@@ -99,10 +99,10 @@ def pair_or_triple_arrays(item: tuple[Any, ...] | list[Any]
     For a pair ``lo`` and ``hi`` are the same array ``b``. None when an entry does not convert
     (the caller's full validation then names it); shapes and values are not checked here.
     """
-    try:
-        A = np.asarray(item[0], dtype=np.float64)
-        lo = np.asarray(item[1], dtype=np.float64)
-        hi = lo if len(item) == 2 else np.asarray(item[2], dtype=np.float64)
-    except (TypeError, ValueError):
+    try:  # real numbers only (strings, booleans and complex numbers are not converted)
+        A = as_array(item[0], "A")
+        lo = as_array(item[1], "lower")
+        hi = lo if len(item) == 2 else as_array(item[2], "upper")
+    except InputError:
         return None
     return A, lo, hi

@@ -29,7 +29,13 @@ from .gradient_projection import (
     normalized_gradient,
 )
 from .inverses import damped_pinv, null_space_projector, pinv, weighted_pinv
-from .joint_limits import joint_limit_gradient, joint_limit_index, joint_limit_weights
+from .joint_limits import (
+    LIMIT_CLEARANCE,
+    joint_limit_gradient,
+    joint_limit_gradient_bound,
+    joint_limit_index,
+    joint_limit_weights,
+)
 from .manipulability import (
     dexterous_task_priority,
     jacobian_derivatives,
@@ -79,6 +85,7 @@ from .task_priority import (
 
 __all__ = [
     "DEFAULT_RULES",
+    "LIMIT_CLEARANCE",
     "PPPS_NAMES",
     "PROJECTORS",
     "FuzzyRules",
@@ -94,6 +101,7 @@ __all__ = [
     "gradient_projection",
     "jacobian_derivatives",
     "joint_limit_gradient",
+    "joint_limit_gradient_bound",
     "joint_limit_index",
     "joint_limit_weights",
     "kinematic_constraint_inverse",
