@@ -16,10 +16,10 @@ from uvms_qp.sim import load_scenario, simulate
 def main(argv: list[str] | None = None) -> dict:
     args = sys.argv[1:] if argv is None else argv
     scenario = load_scenario(args[0] if args else "bluerov2_demo")
-    print(f"{scenario.name}: {scenario.model.name}, {len(scenario.stack.levels)} levels, "
+    print(f"{scenario.name}: {scenario.model.name}, {len(scenario.task_names)} levels, "
           f"{scenario.steps} steps of {scenario.dt} s, solver {scenario.solver}")
-    for k, level in enumerate(scenario.stack.levels, start=1):
-        print(f"  level {k}: " + ", ".join(task.name for task in level.tasks))
+    for k, names in enumerate(scenario.task_names, start=1):
+        print(f"  level {k}: " + ", ".join(names))
     result = simulate(scenario)
     phases = result.phase_metrics()
     for name, metrics in phases.items():

@@ -15,6 +15,9 @@ from uvms_qp.analytic import (
     payload_moment,
     payload_objective,
     payload_objective_gradient,
+    pinv,
+    static_tilt,
+    vehicle_payload_moment,
     weighted_pinv,
 )
 from uvms_qp.errors import BoundsError, InputError, ShapeError
@@ -138,3 +141,67 @@ def test_eq23_keeps_end_effector_rate():
         J, [0.1, 0.0, 0.0], [g1, g2], [0.8, -0.3], 0.2, inverse_weights=w_inv
     )
     assert np.allclose(J @ x, [0.1, 0.0, 0.0])
+
+
+def _eq23_case(seed):
+    rng = np.random.default_rng(seed)
+    J = rng.normal(size=(3, 9))
+    w_inv = motion_distribution(0.9, 4, 5)  # vehicle 2e-3, arm 0.9
+    g = np.concatenate([np.zeros(4), rng.normal(size=5)])
+    return J, w_inv, g
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_both_projectors_keep_the_tool_rate_and_differ_as_documented(seed):
+    J, w_inv, g = _eq23_case(seed)
+    xdot = np.array([0.1, -0.2, 0.05])
+    particular = weighted_pinv(J, inverse_weights=w_inv) @ xdot
+    steps = {}
+    for projector in ("weighted", "euclidean"):
+        x = multi_objective_gradient_projection(J, xdot, [g], [1.0], 0.2, inverse_weights=w_inv,
+                                                projector=projector)
+        assert np.allclose(J @ x, xdot)
+        steps[projector] = x - particular
+    unit = 0.2 * g / np.linalg.norm(g)
+    # Euclidean: the orthogonal projection I - J^+ J of the step (independent oracle: pinv)
+    assert np.allclose(steps["euclidean"], unit - pinv(J) @ (J @ unit))
+    # weighted: the step corrected along W^-1 J^T, so the vehicle (tiny W^-1) barely moves
+    correction = unit - steps["weighted"]
+    lam = np.linalg.lstsq((w_inv[:, None] * J.T), correction, rcond=None)[0]
+    assert np.allclose(w_inv * (J.T @ lam), correction)
+    assert np.linalg.norm(steps["weighted"][:4]) < 0.05 * np.linalg.norm(steps["euclidean"][:4])
+
+
+def test_projectors_agree_without_a_metric_and_unknown_ones_are_refused():
+    J, _, g = _eq23_case(0)
+    a, b = (multi_objective_gradient_projection(J, np.zeros(3), [g], [1.0], 0.2, projector=p)
+            for p in ("weighted", "euclidean"))
+    assert np.allclose(a, b)
+    with pytest.raises(InputError, match="projector"):
+        multi_objective_gradient_projection(J, np.zeros(3), [g], [1.0], 0.2, projector="oblique")
+
+
+def test_vehicle_payload_moment_hand_values():
+    # 10 N down, 2 m ahead and 0.5 m to starboard: nose down (-20 N m), roll to starboard (+5 N m)
+    assert np.allclose(vehicle_payload_moment([2.0, 0.5, 0.3], 10.0), [5.0, -20.0])
+
+
+def test_static_tilt_balances_the_restoring_moment():
+    weight, bg = 2000.0, 0.05  # restoring stiffness W BG = 100 N m
+    phi, theta = static_tilt([3.0, -20.0], weight, bg)
+    assert 100.0 * np.sin(theta) == pytest.approx(-20.0)
+    assert 100.0 * np.cos(theta) * np.sin(phi) == pytest.approx(3.0)
+    # small moments: tilt = moment / (W GM), with separate transverse and longitudinal heights
+    small = static_tilt([0.01, 0.02], weight, [0.05, 0.1])
+    assert np.allclose(small, [0.01 / 100.0, 0.02 / 200.0], rtol=1e-6)
+
+
+def test_static_tilt_refuses_a_moment_it_cannot_balance():
+    with pytest.raises(InputError, match="pitch moment"):
+        static_tilt([0.0, 120.0], 2000.0, 0.05)
+    with pytest.raises(InputError, match="roll moment"):
+        static_tilt([101.0, 0.0], 2000.0, 0.05)
+    with pytest.raises(InputError, match="metacentric_height"):
+        static_tilt([0.0, 1.0], 2000.0, [0.05, -0.1])
+    with pytest.raises(InputError, match="weight"):
+        static_tilt([0.0, 1.0], 0.0, 0.05)

@@ -13,6 +13,7 @@ from uvms_qp.analytic import (
     self_motion_field,
     shoulder_term,
     signed_minor_null_vector,
+    singularity_crossings,
 )
 from uvms_qp.errors import InputError, ShapeError
 
@@ -158,3 +159,29 @@ def test_natural_motion_crosses_extended_arm_singularity_on_the_line():
     assert np.any(np.diff(np.sign(s4)) != 0)  # q4 passes through 0: singularity crossed
     assert max(rates) < 2.0  # with bounded joint rates
     assert pos[-1, 0] < pos[:, 0].max()  # and the motion reverses
+
+
+def _history(rows):
+    return np.array(rows, dtype=float), np.linspace(0.0, 1.0, len(rows))
+
+
+def test_crossings_of_the_extended_and_folded_arm():
+    q4 = np.linspace(-0.5, 0.3, 9)  # through 0 at t = 0.625
+    joints, t = _history([[0.2, 0.4, 0.1, a] for a in q4])
+    assert singularity_crossings(joints, t) == [(pytest.approx(0.625), "extended")]
+    q4 = np.linspace(3.0, 3.3, 7)  # through pi (d5 < d3: the folded wrist is off the Z axis)
+    joints, t = _history([[0.2, 0.4, 0.1, a] for a in q4])
+    [(t_cross, kind)] = singularity_crossings(joints, t, d3=1.0, d5=0.5)
+    assert kind == "folded" and t_cross == pytest.approx((np.pi - 3.0) / 0.3, abs=1e-3)
+
+
+def test_crossing_of_the_shoulder_singularity_and_not_of_c_elsewhere():
+    # q3 = 0, q4 = -1.2: the wrist is on the Z axis at q2 = 0.6
+    joints, t = _history([[0.0, a, 0.0, -1.2] for a in np.linspace(0.5, 0.7, 11)])
+    [(t_cross, kind)] = singularity_crossings(joints, t)
+    assert kind == "shoulder" and t_cross == pytest.approx(0.5, abs=1e-3)
+    # c = d5 C3 S4 changes sign at q3 = pi/2 with the wrist 1 m from the axis: not singular
+    joints, t = _history([[0.0, 0.0, a, -np.pi / 2] for a in np.linspace(1.4, 1.7, 7)])
+    assert singularity_crossings(joints, t) == []
+    with pytest.raises(ShapeError, match="joints"):
+        singularity_crossings(np.zeros((3, 3)), np.zeros(3))

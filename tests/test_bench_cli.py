@@ -8,6 +8,7 @@ import json
 import pytest
 
 from uvms_qp.bench.record import CSV_COLUMNS
+from uvms_qp.bench.report import HEADERS, TERMINAL_HEADERS, TERMINAL_WIDTH
 from uvms_qp.bench.runners import runner_names
 from uvms_qp.cli import main
 
@@ -94,12 +95,28 @@ def test_rows_only_in_the_csv_are_copied_into_a_new_json(tiny_run, tmp_path):
     assert len(daqp) == 9 and all(r["successes"] == r["trials"] == 1 for r in daqp)
 
 
-def test_quick_smoke_run(capsys):
-    assert main(["bench", "--quick", "--no-progress"]) == 0
-    out = capsys.readouterr().out
+def test_quick_smoke_run_fits_100_columns_with_progress_lines_when_piped(capsys, tmp_path):
+    markdown = tmp_path / "table.md"
+    assert main(["bench", "--quick", "--markdown", str(markdown)]) == 0
+    captured = capsys.readouterr()
+    out = captured.out
     for name in ("daqp", "cascade:quadprog", "nullspace", "weighted"):
         assert name in out
     assert "scenarios" in out and "random" in out and "raw" in out
+    # the terminal table: its main columns, whole (no cell cut with an ellipsis), 100 wide
+    assert max(len(line) for line in out.splitlines()) <= TERMINAL_WIDTH
+    assert "\u2026" not in out and "..." not in out
+    header = next(line for line in out.splitlines() if line.startswith("solver"))
+    assert header.split() == " ".join(TERMINAL_HEADERS).split()
+    # every column in the markdown table
+    assert markdown.read_text().splitlines()[0] == "| " + " | ".join(HEADERS) + " |"
+    # no terminal: progress as lines on stderr, the first row and the last one included
+    lines = [line for line in captured.err.splitlines() if line.startswith("bench: ")]
+    assert lines[0].startswith("bench: 1/") and "scenarios/" in lines[0]
+    total = lines[0].split()[1].split("/")[1]
+    assert lines[-1].startswith(f"bench: {total}/{total} rows")
+    assert {line.split(": ")[2].split("/")[0] for line in lines} == {"scenarios", "random",
+                                                                    "raw"}
 
 
 def test_bad_options_are_clean_errors(capsys, tmp_path):

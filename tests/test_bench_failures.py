@@ -49,7 +49,7 @@ class BrokenRunner(HqpRunner):
             raise RuntimeError("controller set-up exploded")
         return super()._uvms_controller(draw)
 
-    def _scenario_controller(self, scenario):
+    def _scenario_controller(self, scenario, stack):
         raise RuntimeError("no scenario for you")
 
 

@@ -124,3 +124,58 @@ def test_linear_inequality_named_columns(rov):
 def test_bad_constraint_arguments(cls, kwargs, match):
     with pytest.raises(InputError, match=match):
         cls(**kwargs)
+
+
+def _outside_states(model, n=10, seed=11):
+    """States with joints drawn up to 20 % of the range beyond either limit."""
+    rng = np.random.default_rng(seed)
+    lo, hi = model.joint_lower, model.joint_upper
+    span = hi - lo
+    out = []
+    for _ in range(n):
+        eta, _ = model.split(model.random_configuration(rng))
+        joints = rng.uniform(lo - 0.2 * span, hi + 0.2 * span)
+        out.append(model.state(model.configuration(eta, joints)))
+    return out
+
+
+@pytest.mark.parametrize("joints", [None, ["axis_d", "axis_b"],
+                                    ["axis_b", "axis_c", "axis_d", "axis_e"]])
+def test_joint_position_bounds_intersect_a_filled_box(rov, joints):
+    """``max(box, min(band, 0))`` / ``min(box, max(band, 0))``, inside and outside the limits."""
+    con = JointPositionBounds(gain=0.7, margin=0.02, joints=joints).bind(rov)
+    idx = np.array([rov.joint_names.index(j) for j in (joints or rov.joint_names)])
+    cols = rov.n_vehicle + idx
+    rng = np.random.default_rng(12)
+    inside = [rov.state(rov.random_configuration(rng)) for _ in range(10)]
+    for state in inside + _outside_states(rov):
+        box_lo = -rng.uniform(0.0, 3.0, rov.nv)
+        box_hi = rng.uniform(0.0, 3.0, rov.nv)
+        lower, upper = box_lo.copy(), box_hi.copy()
+        con.fill_box(state, 0.05, lower, upper)
+        q = state.joints[idx]
+        k = 0.7 / 0.05
+        band_lo = np.minimum((rov.joint_lower[idx] + 0.02 - q) * k, 0.0)
+        band_hi = np.maximum((rov.joint_upper[idx] - 0.02 - q) * k, 0.0)
+        ref_lo, ref_hi = box_lo.copy(), box_hi.copy()
+        ref_lo[cols] = np.maximum(box_lo[cols], band_lo)
+        ref_hi[cols] = np.minimum(box_hi[cols], band_hi)
+        np.testing.assert_array_equal(lower, ref_lo)
+        np.testing.assert_array_equal(upper, ref_hi)
+        assert np.all(lower <= 0.0) and np.all(upper >= 0.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"upper": True}, r"linear_inequality\.upper: expected real numbers, got booleans"),
+        ({"lower": [False]}, r"linear_inequality\.lower: expected real numbers, got booleans"),
+        ({"A_row": ["1"] * 10}, r"linear_inequality\.A: expected real numbers, got strings"),
+        ({"A_row": [1j] * 10}, r"linear_inequality\.A: expected real numbers, got complex"),
+    ],
+)
+def test_linear_inequality_takes_real_numbers_only(kwargs, match):
+    """``upper=True`` used to become 1.0 and a complex row lost its imaginary part."""
+    row = kwargs.pop("A_row", [1.0] * 10)
+    with pytest.raises(InputError, match=match):
+        LinearInequality(A=[row], **kwargs)

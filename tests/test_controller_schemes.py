@@ -263,10 +263,10 @@ def test_non_finite_rows_name_the_task(rov):
     class Broken(PostureTask):
         type_name = "broken"
 
-        def compute_error(self, state, t):
-            e = super().compute_error(state, t)
+        def error_rows(self, state, t):
+            J, e, ff = super().error_rows(state, t)
             e[1] = np.nan
-            return e
+            return J, e, ff
 
     stack = Stack(levels=[Level(EndEffectorTask(position=[0.5, 0.0, 0.0])),
                           Level(Broken(name="bad"))])

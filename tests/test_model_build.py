@@ -180,8 +180,10 @@ def test_partially_actuated_vehicle_selects_columns():
     assert math.atan2(step[1, 0], step[0, 0]) == pytest.approx(0.8 * 0.7, abs=1e-12)
     # the Jacobian over zeta is Pinocchio's full Jacobian without the p and q columns
     state = model.state(q)
+    data = model.pin_model.createData()
+    pin.computeJointJacobians(model.pin_model, data, state.q)
     full = pin.getFrameJacobian(
-        model.pin_model, model._data, model.frame_id("tool"), pin.LOCAL_WORLD_ALIGNED
+        model.pin_model, data, model.frame_id("tool"), pin.LOCAL_WORLD_ALIGNED
     )
     np.testing.assert_array_equal(state.jacobian("tool"), full[:, [0, 1, 2, 5, 6, 7]])
 

@@ -114,7 +114,7 @@ def test_missing_urdf(tmp_path):
             "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
             "<parent link='a'/><child link='b'/><origin xyz='0 zero 0'/>"
             "<limit lower='0' upper='1' velocity='1' effort='1'/></joint></robot>",
-            "Pinocchio could not build it",
+            r"joint 'j' <origin xyz>: expected 3 finite numbers, got '0 zero 0'",
         ),
     ],
 )
@@ -208,3 +208,109 @@ def test_bad_rows_and_axes_names(rov):
     axes = "unknown axis convention 'body'; known axis conventions: world, local"
     with pytest.raises(UnknownNameError, match=axes):
         state.jacobian("tool", axes="body")
+
+
+# ------------------------------------------------------------------------------- URDF content
+_LIMIT = "<limit lower='-1' upper='1' velocity='1' effort='1'/>"
+
+
+def _urdf(tmp_path, joint_body, *, joint_name="j", child="b", extra=""):
+    path = tmp_path / "arm.urdf"
+    path.write_text(
+        "<robot name='x'><link name='a'/><link name='b'/>"
+        f"<joint name='{joint_name}' type='revolute'><parent link='a'/><child link='{child}'/>"
+        f"{joint_body}</joint>{extra}</robot>"
+    )
+    return path
+
+
+@pytest.mark.parametrize(
+    ("body", "error", "match"),
+    [
+        (f"<axis xyz='0 0 0'/>{_LIMIT}", ModelFileError, r"joint 'j' <axis xyz='0 0 0'> is zero"),
+        (f"<axis xyz='nan 0 1'/>{_LIMIT}", ModelFileError,
+         r"joint 'j' <axis xyz>: expected 3 finite numbers, got 'nan 0 1'"),
+        (f"<axis xyz='up'/>{_LIMIT}", ModelFileError, r"joint 'j' <axis xyz>: .* got 'up'"),
+        (f"<axis xyz='0 0 1 0'/>{_LIMIT}", ModelFileError, r"joint 'j' <axis xyz>"),
+        ("<limit lower='-1' upper='1' velocity='1'/>", ModelFileError,
+         r"joint 'j' <limit> has no effort="),
+        ("<limit lower='-1' upper='1' effort='1'/>", ModelFileError,
+         r"joint 'j' <limit> has no velocity="),
+        ("<limit lower='low' upper='1' velocity='1' effort='1'/>", ModelFileError,
+         r"joint 'j' <limit lower>: expected 1 finite number, got 'low'"),
+        ("<limit lower='-1' upper='nan' velocity='1' effort='1'/>", ModelFileError,
+         r"joint 'j' <limit upper>"),
+        ("<limit lower='-1' upper='1' velocity='-2' effort='1'/>", ModelFileError,
+         r"joint 'j' <limit velocity='-2'> is negative"),
+        ("<limit lower='1' upper='-1' velocity='1' effort='1'/>", ModelError,
+         r"joint 'j' has lower limit 1.0 >= upper limit -1.0"),
+        (f"<mimic joint='other'/>{_LIMIT}", ModelError,
+         r"joint 'j' <mimic joint='other'> is not supported"),
+    ],
+)
+def test_malformed_urdf_joints_name_the_element(tmp_path, body, error, match):
+    """Silently wrong or refused by Pinocchio without a culprit: each names joint and element."""
+    with pytest.raises(error, match=match) as info:
+        Model.from_urdf(_urdf(tmp_path, body))
+    assert "arm.urdf" in str(info.value)
+
+
+def test_a_urdf_without_a_moving_joint_is_refused(tmp_path):
+    path = tmp_path / "rigid.urdf"
+    path.write_text("<robot name='x'><link name='a'/><link name='b'/><joint name='f' type='fixed'>"
+                    "<parent link='a'/><child link='b'/></joint></robot>")
+    with pytest.raises(ModelError, match="no revolute or prismatic joint"):
+        Model.from_urdf(path)
+
+
+def test_a_joint_named_like_a_link_is_legal(tmp_path):
+    """URDF keeps joints and links in separate namespaces; the link stays the public frame."""
+    path = _urdf(tmp_path, f"<axis xyz='0 0 1'/>{_LIMIT}", joint_name="b",
+                 extra="<link name='c'/><joint name='c' type='fixed'><parent link='b'/>"
+                       "<child link='c'/><origin xyz='0.5 0 0'/></joint>")
+    model = Model.from_urdf(path, vehicle="fixed")
+    assert model.joint_names == ("b",)
+    assert {"b", "c"} <= set(model.frames)
+    state = model.state(model.configuration(None, [np.pi / 2]))
+    np.testing.assert_allclose(state.position("c"), [0.0, 0.5, 0.0], atol=1e-12)
+    np.testing.assert_allclose(state.position("tool"), [0.0, 0.5, 0.0], atol=1e-12)
+
+
+def test_urdf_size_and_chain_length_are_bounded(tmp_path):
+    from uvms_qp.model.urdf import MAX_FILE_BYTES, MAX_MOVING_JOINTS
+
+    n = MAX_MOVING_JOINTS + 1
+    parts = ["<robot name='c'><link name='l0'/>"]
+    for i in range(n):
+        parts.append(f"<link name='l{i + 1}'/><joint name='j{i}' type='revolute'>"
+                     f"<parent link='l{i}'/><child link='l{i + 1}'/><origin xyz='0 0 0.1'/>"
+                     f"<axis xyz='0 0 1'/>{_LIMIT}</joint>")
+    parts.append("</robot>")
+    path = tmp_path / "long.urdf"
+    path.write_text("".join(parts))
+    with pytest.raises(ModelError, match=f"{n} moving joints; an arm may have at most "
+                                         f"{MAX_MOVING_JOINTS}"):
+        Model.from_urdf(path)
+    big = tmp_path / "big.urdf"
+    big.write_text(_urdf(tmp_path, f"<axis xyz='0 0 1'/>{_LIMIT}").read_text()
+                   + "<!--" + " " * MAX_FILE_BYTES + "-->")
+    with pytest.raises(ModelFileError, match=f"at most {MAX_FILE_BYTES} bytes"):
+        Model.from_urdf(big)
+
+
+@pytest.mark.parametrize("path", [None, 3, ["arm.urdf"]])
+def test_a_urdf_path_must_be_a_path(path):
+    with pytest.raises(InputError, match="path: expected a URDF file path"):
+        Model.from_urdf(path)
+
+
+@pytest.mark.parametrize(
+    ("value", "what"),
+    [(["0"] * 11, "strings"), ([True] + [0.0] * 10, "boolean"), ([0j] * 11, "complex"),
+     (np.zeros(11, dtype=complex), "complex"), (np.zeros(11, dtype=bool), "booleans"),
+     ([None] * 11, "NoneType")],
+)
+def test_a_configuration_must_be_real_numbers(rov, value, what):
+    """Strings, booleans and complex numbers are refused, not converted (imaginary part lost)."""
+    with pytest.raises(InputError, match=f"q: expected real numbers, got .*{what}"):
+        rov.state(value)

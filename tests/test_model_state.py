@@ -1,14 +1,25 @@
 """State semantics: cached kinematics, independence of states, conversions, integration."""
 
+import gc
 import math
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference_kinematics import Ref
 
 import uvms_qp
 from uvms_qp import State, bundled_models, load_model
+from uvms_qp.model.state import POOL_SIZE
+from uvms_qp.model.transforms import (
+    matrix_to_rpy,
+    quaternion_to_rotation,
+    rotation_to_rpy,
+    rpy_to_matrix,
+    rpy_to_rotation,
+)
 
 MODELS = {name: load_model(name) for name in bundled_models()}
 
@@ -33,7 +44,7 @@ def test_interleaved_states_keep_their_own_kinematics():
     rng = np.random.default_rng(1)
     q1, q2 = model.random_configuration(rng), model.random_configuration(rng)
     s1 = model.state(q1)
-    s2 = model.state(q2)  # takes over the model's Pinocchio buffers
+    s2 = model.state(q2)
     fresh1 = load_model("wang_9dof").state(q1)
     fresh2 = load_model("wang_9dof").state(q2)
     # frames that s1 never asked for before s2 existed
@@ -44,6 +55,97 @@ def test_interleaved_states_keep_their_own_kinematics():
     np.testing.assert_allclose(s1.pose("tool"), fresh1.pose("tool"), atol=1e-14)
 
 
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_every_quantity_equals_pinocchio_on_a_fresh_data(name):
+    """Poses, Jacobians, ``eta``, ``J_eta`` and arm quantities against an independent oracle."""
+    model = MODELS[name]
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        q = model.random_configuration(rng)
+        state, ref = model.state(q), Ref(model, q)
+        np.testing.assert_allclose(state.eta, ref.eta, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.vehicle_pose_jacobian(), ref.eta_jacobian(), rtol=0,
+                                   atol=1e-12)
+        T_b = ref.pose("arm_base")
+        for frame in model.frames:
+            np.testing.assert_allclose(state.pose(frame), ref.pose(frame), atol=1e-13)
+            np.testing.assert_allclose(state.jacobian(frame), ref.jacobian(frame), atol=1e-13)
+            p = T_b[:3, :3].T @ (ref.pose(frame)[:3, 3] - T_b[:3, 3])
+            np.testing.assert_allclose(state.arm_position(frame), p, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(state.arm_jacobian(frame), ref.arm_jacobian(frame),
+                                       atol=1e-12)
+
+
+def test_a_value_outlives_its_state():
+    """Buffers go back to the model's pool when a state dies: values read before stay put."""
+    model = load_model("bluerov2_heavy_alpha5")
+    rng = np.random.default_rng(2)
+    q1, q2 = model.random_configuration(rng), model.random_configuration(rng)
+    kept = {"pose": model.state(q1).pose("tool"), "position": model.state(q1).position("tool"),
+            "jacobian": model.state(q1).jacobian("tool"),
+            "arm": model.state(q1).arm_position("tool"),
+            "arm_jacobian": model.state(q1).arm_jacobian("tool")}
+    for _ in range(3):
+        other = model.state(q2)  # reuses the pooled buffers
+        other.pose("tool"), other.jacobian("tool"), other.arm_jacobian("tool")
+        other.arm_position("tool")
+    fresh = load_model("bluerov2_heavy_alpha5").state(q1)  # another model: other buffers
+    for key, value in kept.items():
+        want = {"pose": fresh.pose("tool"), "position": fresh.position("tool"),
+                "jacobian": fresh.jacobian("tool"), "arm": fresh.arm_position("tool"),
+                "arm_jacobian": fresh.arm_jacobian("tool")}[key]
+        np.testing.assert_array_equal(value, want, err_msg=key)
+
+
+def test_the_pool_reuses_buffers_and_stays_small():
+    model = load_model("wang_9dof")
+    q = model.home()
+    model.state(q).arm_jacobian()
+    gc.collect()
+    data = model._data_pool[-1]
+    state = model.state(q)
+    assert state._data is data  # taken from the pool, not built
+    states = [model.state(q) for _ in range(3 * POOL_SIZE)]
+    assert len({id(s._data) for s in states}) == len(states)  # every live state has its own
+    del states, state
+    gc.collect()
+    assert len(model._data_pool) == POOL_SIZE
+
+
+def test_rotation_conversions_equal_pinocchio():
+    """The one implementation of quaternion / matrix / roll-pitch-yaw against Pinocchio's."""
+    rng = np.random.default_rng(0)
+    quats = rng.normal(size=(2000, 4))
+    quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+    for x, y, z, w in quats:
+        R_ref = pin.Quaternion(w, x, y, z).toRotationMatrix()
+        R = np.array(quaternion_to_rotation(x, y, z, w)).reshape(3, 3)
+        np.testing.assert_array_equal(R, R_ref)
+        rpy = np.array(rotation_to_rpy(R.ravel().tolist()))
+        np.testing.assert_allclose(rpy, pin.rpy.matrixToRpy(R_ref), rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(matrix_to_rpy(R), rpy, rtol=0.0, atol=0.0)
+    angles = list(rng.uniform(-math.pi, math.pi, size=(2000, 3)))
+    angles += [np.array(a, dtype=float) for a in ((0, 0, 0), (math.pi, 0, 0), (0, math.pi / 2, 0),
+                                     (0, -math.pi / 2, math.pi), (1.0, 0.5, -math.pi))]
+    for r, p, y in angles:
+        R = np.array(rpy_to_rotation(r, p, y)).reshape(3, 3)
+        np.testing.assert_allclose(R, pin.rpy.rpyToMatrix(r, p, y), rtol=0.0, atol=1e-15)
+        np.testing.assert_array_equal(rpy_to_matrix([r, p, y]), R)
+
+
+def test_vehicle_pose_jacobian_keeps_the_actuated_columns_of_fossen():
+    """``J_eta`` of a 4-DOF vehicle: the u, v, w, r columns of the full transformation."""
+    vehicle = uvms_qp.model.Vehicle("spatial", actuated=("u", "v", "w", "r"))
+    model = uvms_qp.Model.from_dh([{"a": 0.3}], vehicle=vehicle)
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        state = model.state(model.random_configuration(rng))
+        full = model.vehicle.pose_jacobian(state.eta)
+        np.testing.assert_allclose(state.vehicle_pose_jacobian()[:, :4], full[:, [0, 1, 2, 5]],
+                                   atol=1e-12)
+        assert not state.vehicle_pose_jacobian()[:, 4:].any()
+
+
 def test_returned_arrays_are_read_only_and_q_is_copied():
     model = load_model("bluerov2_heavy_alpha5")
     q = model.home()
@@ -51,7 +153,9 @@ def test_returned_arrays_are_read_only_and_q_is_copied():
     q[0] = 100.0  # the caller's array is not the state's
     assert state.q[0] == 0.0
     for array in (state.q, state.pose("tool"), state.jacobian("tool"), state.arm_jacobian(),
-                  state.eta, state.joints):  # fmt: skip
+                  state.eta, state.joints, state.vehicle_pose_jacobian(),
+                  state.arm_position("tool"), state.position("tool"),
+                  state.pose_in("tool", "vehicle")):  # fmt: skip
         with pytest.raises(ValueError, match="read-only"):
             array[0] = 1.0
     assert state.jacobian("tool") is state.jacobian("tool")  # cached, not recomputed

@@ -26,7 +26,7 @@ STEPS = 30
 def reference():
     """States and commands of a clean closed-loop run of the demo (daqp)."""
     sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric)
+    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric)
     q = np.array(sc.q0)
     qs, zetas = [], []
     for k in range(STEPS):
@@ -45,7 +45,7 @@ def replay(qs, fault, *, start=K, count=1, armed=False, everything=False, strict
     ``everything`` faults the alternate back-end as well; ``at="binding"`` faults DAQP's C
     binding below the back-end instead of the back-end object."""
     sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric, strict=strict,
+    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric, strict=strict,
                       deadline=deadline)
     wrappers = [inject(ctrl, fault, sleep=sleep, at=at)]
     if everything:
@@ -161,7 +161,7 @@ def test_weighted_scheme_falls_back_to_a_weight_honouring_cascade(reference):
     alternate is a cascade on another library, and it gives the primary's answer."""
     qs, _ = reference
     sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.stack, dt=sc.dt, metric=sc.metric, scheme="weighted",
+    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric, scheme="weighted",
                       priority_ratio=100.0)
     assert ctrl.solver_name == "cascade:daqp"
     assert ctrl.safe.alternate.name.startswith("cascade:")

@@ -84,7 +84,7 @@ def test_the_base_scenario_is_valid():
     assert scenario.steps == 10
     assert scenario.tracking == "tool"
     assert scenario.events[0].update == {"force": 10.0}
-    assert scenario.task("current_alignment").heading == pytest.approx(0.2)
+    assert scenario.build_stack().task("current_alignment").heading == pytest.approx(0.2)
 
 
 # (old text, new text, expected path, fragment of the message)
@@ -307,3 +307,51 @@ def test_corrupted_field_loads_or_raises_config_error(path, value):
     metrics = result.metrics()
     assert metrics["nan_steps"] == 0
     assert metrics["bound_violation_max"] <= 1e-7
+
+
+# ---- ranges: step count, control period, initial pose, file size and nesting
+
+
+@pytest.mark.parametrize(("old", "new", "path", "fragment"), [
+    ("dt = 0.1", "dt = 5e-324", "dt", "expected a control period in [1e-06, 10] s"),
+    ("dt = 0.1", "dt = 11.0", "dt", "expected a control period in [1e-06, 10] s, got 11"),
+    ("duration = 1.0\n\n[initial]", "duration = 1e308\n\n[initial]", "duration",
+     "1e+308 s at dt = 0.1 s is over 1e308 steps; at most 2000000 are allowed"),
+    ("duration = 1.0\n\n[initial]", "duration = 0.04\n\n[initial]", "duration",
+     "0.04 s is shorter than one control period (dt = 0.1 s)"),
+    ("joints = [3.14159", "eta = [1e300, 0, 0, 0, 0, 0]\njoints = [3.14159", "initial.eta[0]",
+     "expected a magnitude <= 1e+06 [m or rad], got 1e+300"),
+    ("joints = [3.14159", "eta = [0, 0, 0, 0, -2e6, 0]\njoints = [3.14159", "initial.eta[4]",
+     "expected a magnitude <= 1e+06"),
+])
+def test_values_outside_the_documented_ranges_are_one_line_errors(old, new, path, fragment):
+    with pytest.raises(ConfigError) as info:
+        load_text(BASE.replace(old, new, 1))
+    assert info.value.path == path, str(info.value)
+    assert str(info.value).startswith(f"{path}: ") and fragment in str(info.value)
+
+
+@pytest.mark.parametrize("value", [
+    "[" * 1000 + "]" * 1000,                        # the parser would recurse past Python's limit
+    "{ a = " * 400 + "1" + " }" * 400,
+    "[" * 33 + "]" * 33,                            # parses, but deeper than documented
+], ids=["arrays_1000", "inline_tables_400", "arrays_33"])
+def test_deeply_nested_values_are_rejected_as_config_errors(tmp_path, value):
+    path = tmp_path / "deep.toml"
+    path.write_text(f"deep = {value}\n" + BASE)
+    with pytest.raises(ConfigError, match=r"deep\.toml: arrays and tables nested more than 32"):
+        load_scenario(path)
+
+
+def test_nesting_up_to_the_limit_is_only_an_unknown_key(tmp_path):
+    path = tmp_path / "deep.toml"
+    path.write_text("deep = " + "[" * 32 + "]" * 32 + "\n" + BASE)
+    with pytest.raises(ConfigError, match=r"^deep: unknown key 'deep'"):
+        load_scenario(path)
+
+
+def test_a_file_larger_than_the_limit_is_rejected_before_parsing(tmp_path):
+    path = tmp_path / "big.toml"
+    path.write_text(BASE + "# " + "x" * (4 * 1024 * 1024) + "\n")
+    with pytest.raises(ConfigError, match=r"big\.toml: larger than 4 MiB"):
+        load_scenario(path)

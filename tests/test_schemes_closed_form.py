@@ -13,6 +13,7 @@ from uvms_qp.schemes import (
     NenchevSingularityConsistent,
     SoyluDexterous,
     SoyluTaskPriority,
+    WangEuclideanProjection,
     WangFuzzyGradientProjection,
     WangPseudoinverse,
     build_scheme,
@@ -68,6 +69,8 @@ def test_bad_parameters_name_the_culprit():
         WangFuzzyGradientProjection(limit_constants=[1.0, 2.0]).bind(WANG, 0.01)
     with pytest.raises(InputError, match="direction"):
         NenchevSingularityConsistent(direction=[0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match="projector"):
+        WangFuzzyGradientProjection(projector="oblique")
 
 
 angles = st.lists(st.floats(-1.2, 1.2), min_size=3, max_size=3)
@@ -106,7 +109,8 @@ def test_wang_schemes_meet_the_tool_rate(q, force):
     joints = np.asarray(q) + np.array([0.0, -0.5, 1.2, 0.5, 0.0])
     state = WANG.state(WANG.configuration(np.zeros(6), joints))
     target = _moving_target(state)
-    for scheme in (WangPseudoinverse(), WangFuzzyGradientProjection(force=force)):
+    for scheme in (WangPseudoinverse(), WangFuzzyGradientProjection(force=force),
+                   WangEuclideanProjection(force=force)):
         scheme.bind(WANG, 0.01)
         scheme.track(target)
         zeta = scheme.step(state, 0.3).zeta
@@ -137,7 +141,8 @@ def test_sc_fields_lie_in_the_kernel_of_the_model_jacobian(q):
 
 PAPER_SCENARIOS = [
     "paper000_quintic", "paper001_circle", "paper002_line_constant_arm_angle",
-    "paper002_line_self_motion", "paper003_case2_pseudoinverse", "paper003_case3_payload",
+    "paper002_line_self_motion", "paper003_case1_no_payload", "paper003_case2_pseudoinverse",
+    "paper003_case3_payload",
 ]
 
 

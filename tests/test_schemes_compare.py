@@ -22,8 +22,8 @@ def test_compare_writes_results_table_and_figures(tmp_path):
     moved = table["metrics"]["vehicle_displacement_max"]["values"]
     assert moved[1] == 0.0 and moved[2] > 0.05
     assert "| vehicle_displacement_max | m |" in (out / "comparison.md").read_text()
-    for figure in ("vehicle_pose.png", "joints.png", "vehicle_rates.png", "configurations.png",
-                   "manipulability_tracking.png"):
+    for figure in ("vehicle_pose.png", "joints.png", "rates.png", "configurations.png",
+                   "manipulability_tracking.png", "tool_tracking.png"):
         assert (out / figure).stat().st_size > 1000
 
 

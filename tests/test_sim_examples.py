@@ -1,4 +1,4 @@
-"""Every example runs headless; every TOML block of docs/scenarios.md is a valid scenario."""
+"""Every example runs headless; the scenarios and Python code of the docs load and run."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from uvms_qp.model import unregister_model
 from uvms_qp.sim.scenario import scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,8 +37,22 @@ def _toml_blocks() -> list[str]:
 
 
 def test_documented_scenarios_load():
-    blocks = [b for b in _toml_blocks() if "model =" in b]
-    assert blocks
+    blocks = [b for b in _toml_blocks() if "model =" in b or "[model]" in b]
+    assert len(blocks) >= 2
     for block in blocks:
-        scenario = scenario_from_dict(tomllib.loads(block))
+        scenario = scenario_from_dict(tomllib.loads(block), source=DOC)  # paths from docs/
         assert scenario.steps > 0
+
+
+@pytest.mark.parametrize("page", ["scenarios.md", "models.md"])
+def test_documented_python_runs(page, monkeypatch):
+    monkeypatch.chdir(ROOT)  # the examples name files of the repository
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / page).read_text(),
+                        flags=re.DOTALL)
+    assert blocks
+    try:
+        for block in blocks:
+            exec(compile(block, page, "exec"), {"__name__": f"docs_{page}"})
+    finally:
+        for name in ("my_rov", "holdout_rov"):  # the names the pages register
+            unregister_model(name)

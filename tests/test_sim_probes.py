@@ -29,7 +29,7 @@ def planar_3r_manipulability(joints):
 @pytest.fixture(scope="module")
 def run():
     scenario = load_scenario("paper001_circle")
-    assert not any(t.type_name == "manipulability" for t in scenario.tasks())
+    assert not any(t.type_name == "manipulability" for t in scenario.build_stack().tasks)
     return simulate(scenario, duration=1.0)
 
 

@@ -32,12 +32,12 @@ def test_defaults_leave_the_controller_lenient_and_unbounded():
     assert controller.safe.deadline is None and controller.safe.strict is False
 
 
-def test_keys_reach_the_controller_and_survive_overrides_and_rebuilds():
+def test_keys_reach_the_controller_and_survive_overrides_and_fresh_stacks():
     scenario = load("strict = true\ndeadline = 0.02")
     assert scenario.strict is True and scenario.deadline == pytest.approx(0.02)
     for controller in (scenario.make_controller(),
                        scenario.make_controller("cascade:quadprog"),  # --solver override
-                       scenario.rebuild().make_controller()):
+                       scenario.make_controller(stack=scenario.build_stack())):
         assert controller.strict is True and controller.safe.strict is True
         assert controller.safe.deadline == pytest.approx(0.02)
 
@@ -66,10 +66,10 @@ def test_bad_values_name_their_field(line, path, words):
 def test_scenario_build_validates_the_deadline():
     scenario = load()
     with pytest.raises(InputError, match="deadline: expected a positive number"):
-        Scenario.build(scenario.model, scenario.stack, scenario.q0, dt=0.1, duration=0.5,
-                       deadline=-1.0)
-    built = Scenario.build(scenario.model, scenario.stack, scenario.q0, dt=0.1, duration=0.5,
-                           strict=True, deadline=0.05)
+        Scenario.build(scenario.model, scenario.build_stack(), scenario.q0, dt=0.1,
+                       duration=0.5, deadline=-1.0)
+    built = Scenario.build(scenario.model, scenario.build_stack(), scenario.q0, dt=0.1,
+                           duration=0.5, strict=True, deadline=0.05)
     controller = built.make_controller()
     assert controller.strict is True and controller.safe.deadline == pytest.approx(0.05)
 

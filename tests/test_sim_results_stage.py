@@ -7,6 +7,7 @@ reported, step by step, and the summary counts must add up to the number of step
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -72,7 +73,7 @@ def test_one_injected_failure_is_recorded_at_its_step():
     # the primary back-end is called once per clean step: call FAULT_STEP fails
     inject(controller.safe.primary, Fault.RAISE_OWN, calls=[FAULT_STEP])
     logged = _Logged(controller)
-    result = simulate(scenario, logged, duration=DURATION)
+    result = simulate(scenario, logged, stack=controller.stack, duration=DURATION)
     assert result.stage == logged.stages
     expected = ["primary"] * STEPS
     expected[FAULT_STEP] = "cold_retry"
@@ -99,12 +100,12 @@ def test_all_back_ends_down_records_degraded_stages_with_their_status():
 
 
 def test_a_slow_step_is_flagged_as_a_deadline_miss():
-    scenario = load_scenario("bluerov2_demo")
-    scenario.deadline = 0.01  # [s], as `deadline = 0.01` in the file
+    # [s], as `deadline = 0.01` in the file
+    scenario = dataclasses.replace(load_scenario("bluerov2_demo"), deadline=0.01)
     controller = scenario.make_controller()
     inject(controller.safe.primary, Fault.SLEEP, calls=[FAULT_STEP], sleep=0.03)
     logged = _Logged(controller)
-    result = simulate(scenario, logged, duration=DURATION)
+    result = simulate(scenario, logged, stack=controller.stack, duration=DURATION)
     assert result.deadline_missed == logged.missed
     assert result.deadline_missed[FAULT_STEP] is True
     # the late answer is verified and used: the command still comes from the primary stage

@@ -13,6 +13,7 @@ import zlib
 import numpy as np
 import pinocchio as pin
 import pytest
+from reference_kinematics import reference_manipulability
 
 from uvms_qp.model import bundled_models, load_model
 from uvms_qp.tasks import (
@@ -24,6 +25,7 @@ from uvms_qp.tasks import (
     PostureTask,
     StationKeepingTask,
     VehicleAttitudeTask,
+    manipulability_and_gradient,
 )
 from uvms_qp.tasks._common import wrap_angle
 
@@ -54,6 +56,14 @@ def _error_tasks(model, rng):
     else:
         tasks.append(EndEffectorTask(mode="pose", position=T[:3, 3], rotation=T[:3, :3],
                                      name="ee_pose"))
+    # targets fixed in moving frames: the rows regulate the frame relative to them
+    T_rel = np.linalg.solve(model.frame_pose(q_target, "vehicle"), T)
+    mode = "position" if model.vehicle_kind == "planar" else "pose"
+    tasks.append(EndEffectorTask(mode=mode, reference="vehicle", target=T_rel, name="ee_veh"))
+    tasks.append(EndEffectorTask(reference="arm_base", position=[0.3, 0.1, -0.2],
+                                 name="ee_base"))
+    tasks.append(EndEffectorTask(mode="pose", reference=model.frames[4], target=np.eye(4),
+                                 name="ee_link"))
     tasks.append(PostureTask(posture=list(model.split(q_target)[1]), name="posture"))
     if model.vehicle_kind != "fixed":
         eta_t = model.split(q_target)[0]
@@ -112,14 +122,17 @@ class _Spin:
         return s
 
 
+@pytest.mark.parametrize("reference", ["world", "vehicle", "link2"])
 @pytest.mark.parametrize("name", ["bluerov2_heavy_alpha5", "wang_9dof"])
-def test_feedforward_matches_target_time_derivative(name):
+def test_feedforward_matches_target_time_derivative(name, reference):
     """At fixed q, d e/dt along the trajectory equals the feed-forward term of the rows."""
     model = load_model(name)
+    if reference not in model.frames:
+        reference = model.frames[5]
     rng = np.random.default_rng(3)
     R0 = pin.exp3(rng.normal(size=3))
     traj = _Spin(rng.normal(size=3), rng.normal(size=3), R0, rng.normal(size=3))
-    task = EndEffectorTask(mode="pose", trajectory=traj).bind(model)
+    task = EndEffectorTask(mode="pose", trajectory=traj, reference=reference).bind(model)
     state = model.state(model.random_configuration(rng))
     t = 0.7
     e_plus = task.compute_error(state, t + H).copy()
@@ -179,8 +192,6 @@ def test_objective_gradients_match_finite_differences(name):
 
 def test_manipulability_reference_values():
     """Planar 2R arm with unit links: w = l1 l2 |sin q2| and dw/dq = [0, cos q2] (q2 in (0, pi))."""
-    from uvms_qp.tasks import manipulability_and_gradient
-
     for q2 in (0.3, 1.0, 2.5):
         # planar 2R arm, unit links, world axes; columns [v; w] for joints 1, 2
         q1 = 0.4
@@ -195,14 +206,32 @@ def test_manipulability_reference_values():
         np.testing.assert_allclose(g, [0.0, math.cos(q2)], atol=1e-12)
 
 
-def test_joint_limit_index_matches_paper_formula():
-    from uvms_qp.tasks import joint_limit_index
 
-    lo, hi, C = np.array([-1.0, 0.0]), np.array([1.0, 3.0]), np.array([10.0, 6.0])
-    H_mid, g_mid = joint_limit_index((lo + hi) / 2, lo, hi, C)
-    assert H_mid == pytest.approx(np.sum(4.0 / C))  # Eq. (15) minimum 4/C_i at mid-range
-    np.testing.assert_allclose(g_mid, 0.0, atol=1e-12)
-    q = np.array([0.5, 2.9])
-    _, g = joint_limit_index(q, lo, hi, C)
-    expected = (hi - lo) ** 2 * (2 * q - hi - lo) / (C * (hi - q) ** 2 * (q - lo) ** 2)  # Eq. (16)
-    np.testing.assert_allclose(g, expected, rtol=1e-12)
+@pytest.mark.parametrize("rows", [None, (0, 1, 2), [0, 1, 2], np.arange(3), (0, 2), [0, 1],
+                                  (3, 4, 5), range(6), (1, 0, 2)])
+@pytest.mark.parametrize("name", ["bluerov2_heavy_alpha5", "wang_9dof"])
+def test_manipulability_gradient_equals_the_trace_formula_for_any_row_sequence(name, rows):
+    """Eq. (19) with a pseudoinverse and explicit column derivatives (independent oracle)."""
+    model = load_model(name)
+    rng = np.random.default_rng(8)
+    ref_rows = [0, 1, 2] if rows is None else list(rows)
+    for _ in range(10):
+        J6 = np.array(model.state(model.random_configuration(rng)).arm_jacobian("tool"))
+        w, g = manipulability_and_gradient(J6, rows)
+        w_ref, g_ref = reference_manipulability(J6, ref_rows)
+        assert w == pytest.approx(w_ref, rel=1e-10, abs=1e-14)
+        scale = max(np.abs(g_ref).max(), 1e-12)
+        np.testing.assert_allclose(g / scale, g_ref / scale, atol=1e-9)
+
+
+def test_tuple_rows_select_rows_not_an_element():
+    model = load_model("wang_9dof")
+    J6 = np.array(model.state(model.random_configuration(9)).arm_jacobian("tool"))
+    w_t, g_t = manipulability_and_gradient(J6, (0, 2))
+    w_l, g_l = manipulability_and_gradient(J6, np.array([0, 2]))
+    assert w_t == w_l
+    np.testing.assert_array_equal(g_t, g_l)
+    w_default, g_default = manipulability_and_gradient(J6)
+    w_tuple, g_tuple = manipulability_and_gradient(J6, (0, 1, 2))
+    assert w_default == w_tuple
+    np.testing.assert_array_equal(g_default, g_tuple)

@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from uvms_qp.analytic import LIMIT_CLEARANCE, joint_limit_gradient_bound
 from uvms_qp.controller import Controller
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
-from uvms_qp.tasks import EndEffectorTask, JointLimitTask, joint_limit_gradient_bound
-from uvms_qp.tasks.joint_limit import LIMIT_CLEARANCE
+from uvms_qp.tasks import EndEffectorTask, JointLimitTask
 
 ROV = load_model("bluerov2_heavy_alpha5")
 C = np.array([10.0, 6.0, 10.0, 10.0])
@@ -97,3 +97,21 @@ def test_every_backend_solves_a_stack_with_joints_at_their_limits(solver):
     assert result.level_violations[0] < 1e-5, result.summary()
     qd = result.zeta[ROV.n_vehicle:]
     assert qd[0] > 0 and qd[1] < 0 and qd[3] < 0
+
+
+def test_margin_rows_on_a_joint_subset_and_outside_the_limits():
+    task = JointLimitTask(mode="margin", margin=0.1, gain=1.5,
+                          joints=["axis_b", "axis_e"]).bind(ROV)
+    idx = task.joint_indices
+    lo_lim, hi_lim = ROV.joint_lower[idx], ROV.joint_upper[idx]
+    rng = np.random.default_rng(14)
+    span = ROV.joint_upper - ROV.joint_lower
+    for _ in range(10):
+        eta, _ = ROV.split(ROV.random_configuration(rng))
+        joints = rng.uniform(ROV.joint_lower - 0.2 * span, ROV.joint_upper + 0.2 * span)
+        state = ROV.state(ROV.configuration(eta, joints))
+        rows = task.rows(state)
+        q = state.joints[idx]
+        np.testing.assert_allclose(rows.lower, 1.5 * (lo_lim + 0.1 - q), rtol=1e-14)
+        np.testing.assert_allclose(rows.upper, 1.5 * (hi_lim - 0.1 - q), rtol=1e-14)
+        assert task.last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()

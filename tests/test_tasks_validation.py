@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from uvms_qp.analytic import LIMIT_CLEARANCE, joint_limit_gradient
 from uvms_qp.errors import InputError, ShapeError, UnknownFrameError, UnknownJointError
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
@@ -19,7 +20,6 @@ from uvms_qp.tasks import (
     StationKeepingTask,
     VehicleAttitudeTask,
     VehicleMotionTask,
-    shaping_function,
 )
 
 
@@ -151,14 +151,6 @@ def test_current_alignment_wraps_the_error(rov):
     assert task.heading == pytest.approx(np.pi / 2)
 
 
-def test_shaping_function_end_points():
-    assert shaping_function(1.3, 1.3) == 0.0
-    assert shaping_function(2.0, 1.3) == 0.0
-    assert shaping_function(0.64, 1.3) == 1.0
-    mid = shaping_function(0.975, 1.3)
-    assert mid == pytest.approx(0.5)
-
-
 def test_shaping_sign_switch(rov):
     """Eq. (21): the gradient term acts only while w is not increasing."""
     task = ManipulabilityTask(mode="shaping", threshold=10.0, gain=1.0).bind(rov)
@@ -206,14 +198,12 @@ def test_stack_bind_error_carries_location(rov):
 
 def test_joint_limit_damping_weights_follow_eq17(rov):
     """Row weights 1 + |dH/dq_i| (the inverse of Eq. (17)'s w_i), refreshed every evaluation."""
-    from uvms_qp.tasks import joint_limit_index
-
     task = JointLimitTask(mode="damping", strength=[10.0, 6.0, 10.0, 10.0], weight=2.0).bind(rov)
     joints = np.array([0.1, 1.9, 3.3, 3.1])  # axis_e and axis_c near a limit
     state = rov.state(rov.configuration(np.zeros(6), joints))
     rows = task.rows(state)
-    _, grad = joint_limit_index(joints, rov.joint_lower, rov.joint_upper,
-                                np.array([10.0, 6.0, 10.0, 10.0]))
+    grad = joint_limit_gradient(joints, rov.joint_lower, rov.joint_upper,
+                                [10.0, 6.0, 10.0, 10.0], clearance=LIMIT_CLEARANCE)
     np.testing.assert_allclose(rows.weights, 2.0 * (1.0 + np.abs(grad)))
     np.testing.assert_allclose(rows.lower, 0.0)
     assert rows.weights[0] > 10 * rows.weights[1]  # near-limit joint is the expensive one
@@ -248,3 +238,88 @@ def test_two_value_point_on_a_planar_model_has_zero_depth(rov):
     moving = EndEffectorTask(position=[1.0, 2.0], name="tip")
     moving.set_target(position=[1.0, 2.0, 3.0])
     moving.bind(rov)
+
+
+# ---------------------------------------------------------------------- choices and targets
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda: EndEffectorTask(mode=["position"]), r"end_effector\.mode: expected one of"),
+        (lambda: EndEffectorTask(mode={"pose": 1}), r"end_effector\.mode: expected one of"),
+        (lambda: JointLimitTask(mode=np.array(["margin", "damping"])),
+         r"joint_limit\.mode: expected one of"),
+        (lambda: StationKeepingTask(hold=np.array(["activation", "current"])),
+         r"station_keeping\.hold: expected one of 'activation', 'current'"),
+        (lambda: ManipulabilityTask(mode=["floor"]), r"manipulability\.mode: expected one of"),
+        (lambda: PayloadMomentTask(mode=("bound",)), r"payload_moment\.mode: expected one of"),
+        (lambda: PostureTask(reference=[0.0]), r"posture\.reference: expected one of"),
+        (lambda: EndEffectorTask(hold=True), r"end_effector\.hold: expected one of 'activation'"),
+    ],
+)
+def test_a_choice_that_is_not_a_string_is_an_input_error(make, match):
+    """Lists, arrays and mappings used to escape as TypeError or numpy's ambiguous truth value."""
+    with pytest.raises(InputError, match=match):
+        make()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"target": np.eye(3)}, ShapeError, r"end_effector\.target: expected 4 rows"),
+        ({"target": np.diag([1.0, 1.0, 1.0, 2.0])}, InputError, "bottom row"),
+        ({"target": np.diag([1.0, 2.0, 1.0, 1.0])}, InputError, "not a rotation matrix"),
+        ({"target": np.diag([1.0, 1.0, -1.0, 1.0])}, InputError, "reflection"),
+        ({"target": {"xyz": [0, 0, 0], "rotation": 0}}, InputError, "unknown keys"),
+        ({"target": "tool"}, InputError, r"end_effector\.target: expected real numbers"),
+        ({"target": np.eye(4), "position": [0, 0, 0]}, InputError, "not both"),
+        ({"hold": "activation", "position": [0, 0, 0]}, InputError, "do not also give position"),
+        ({"reference": "tool"}, InputError, "the controlled frame itself"),
+        ({"reference": 3}, InputError, r"end_effector\.reference: expected a frame name"),
+    ],
+)
+def test_end_effector_targets_are_validated(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        EndEffectorTask(**kwargs)
+
+
+def test_a_target_frame_must_exist(rov):
+    task = EndEffectorTask(reference="object", position=[0.1, 0, 0])
+    with pytest.raises(UnknownFrameError, match="'object'; known frames: world, vehicle"):
+        task.bind(rov)
+
+
+def test_pose_targets_equal_position_and_rotation(rov):
+    """SE3, 4x4 and {"xyz", "rpy"} targets give the rows of position= plus rotation=."""
+    import pinocchio as pin
+
+    R = pin.rpy.rpyToMatrix(0.3, -0.2, 1.1)
+    p = np.array([0.6, 0.1, -0.2])
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    state = rov.state(rov.random_configuration(4))
+    want = EndEffectorTask(mode="pose", position=p, rotation=R).bind(rov).rows(state)
+    for target in (pin.SE3(R, p), T, {"xyz": p.tolist(), "rpy": [0.3, -0.2, 1.1]}):
+        got = EndEffectorTask(mode="pose", target=target).bind(rov).rows(state)
+        np.testing.assert_allclose(got.A, want.A, atol=1e-14)
+        np.testing.assert_allclose(got.lower, want.lower, atol=1e-14)
+    task = EndEffectorTask(mode="pose", position=[0, 0, 0], rotation=np.eye(3)).bind(rov)
+    task.update(target=pin.SE3(R, p))
+    np.testing.assert_allclose(task.rows(state).lower, want.lower, atol=1e-14)
+    assert task.target(0.0)[0].tolist() == p.tolist()
+
+
+def test_holding_takes_the_pose_of_the_first_evaluation(rov):
+    rng = np.random.default_rng(2)
+    s0, s1 = (rov.state(rov.random_configuration(rng)) for _ in range(2))
+    task = EndEffectorTask(mode="pose", reference="vehicle", hold="activation").bind(rov)
+    assert task.has_target and task.target(0.0) == (None, None)
+    np.testing.assert_allclose(task.compute_error(s0, 0.0), 0.0, atol=1e-12)  # here: held
+    held = s0.pose_in("tool", "vehicle")
+    np.testing.assert_allclose(task.target(0.0)[0], held[:3, 3])
+    assert np.abs(task.compute_error(s1, 0.1)).max() > 1e-3  # moved away: error
+    T_v = s1.pose("vehicle")  # the held point, carried by the vehicle, in world coordinates
+    np.testing.assert_allclose(task.target(0.1, s1)[0], T_v[:3, :3] @ held[:3, 3] + T_v[:3, 3])
+    task.reset()  # re-armed: the next evaluation holds again
+    np.testing.assert_allclose(task.compute_error(s1, 0.2), 0.0, atol=1e-12)
+    task.update(position=[0.5, 0.0, 0.0])  # an explicit target ends holding
+    assert task.hold is None

@@ -7,6 +7,7 @@ names the culprit (the argument name passed by the caller).
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterable
 from typing import Any
 
@@ -18,12 +19,52 @@ from .errors import BoundsError, InputError, NonFiniteError, ShapeError, Unknown
 FloatArray = NDArray[np.float64]
 
 
-def _to_float_array(value: Any, name: str) -> FloatArray:
+_KIND_NAMES = {"b": "booleans", "c": "complex numbers", "U": "strings", "S": "bytes",
+               "M": "dates", "m": "time spans", "V": "records"}
+
+
+def _holds_bool(value: Any) -> bool:
+    """True when a (nested) list or tuple holds a boolean (numpy would read it as 0 or 1)."""
+    if isinstance(value, bool | np.bool_):
+        return True
+    if isinstance(value, list | tuple):
+        return any(_holds_bool(v) for v in value)
+    return False
+
+
+def as_array(value: Any, name: str) -> FloatArray:
+    """``value`` as a float64 array of any shape, accepting only real numbers.
+
+    Booleans, complex numbers, strings and other objects are rejected instead of converted
+    (numpy would read ``True`` as 1, ``"2"`` as 2 and drop an imaginary part). An input that is
+    already a float64 array is returned as is (not copied).
+
+    Raises:
+        InputError: not an array of real numbers (ragged nesting, strings, booleans, complex).
+    """
+    if type(value) is np.ndarray and value.dtype.kind in "fiu":
+        return value.astype(np.float64, copy=False)  # the common case: no scan needed
     try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nesting
         raise InputError(f"{name}: expected numbers, got {type(value).__name__}") from exc
-    return array
+    kind = array.dtype.kind
+    if kind == "O":
+        flat = array.reshape(-1).tolist()
+        if not all(isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+                   for v in flat):
+            bad = next(v for v in flat if not isinstance(v, numbers.Real)
+                       or isinstance(v, bool | np.bool_))
+            raise InputError(f"{name}: expected real numbers, got {type(bad).__name__} {bad!r}")
+    elif kind not in "fiu":
+        raise InputError(f"{name}: expected real numbers, got "
+                         f"{_KIND_NAMES.get(kind, array.dtype.name)}")
+    elif _holds_bool(value):
+        raise InputError(f"{name}: expected real numbers, got a boolean")
+    try:
+        return array.astype(np.float64, copy=False)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"{name}: expected real numbers ({exc})") from exc
 
 
 def _check_finite(array: FloatArray, name: str, allow_inf: bool) -> None:
@@ -57,7 +98,7 @@ def as_vector(
         NonFiniteError: NaN (or inf when not allowed).
         InputError: an entry <= 0 with ``positive``.
     """
-    array = _to_float_array(value, name)
+    array = as_array(value, name)
     if array.ndim == 0:
         array = array.reshape(1)
     if array.ndim != 1:
@@ -84,7 +125,7 @@ def as_matrix(
         ShapeError: not 2-D or wrong row/column count.
         NonFiniteError: NaN or inf entries.
     """
-    array = _to_float_array(value, name)
+    array = as_array(value, name)
     if array.ndim != 2:
         raise ShapeError(f"{name}: expected a 2-D array, got shape {array.shape}")
     if rows is not None and array.shape[0] != rows:

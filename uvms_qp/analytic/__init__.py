@@ -23,12 +23,19 @@ from .davies import (
 )
 from .fuzzy import DEFAULT_RULES, FuzzyRules, FuzzyWeights, fuzzy_weights, memberships
 from .gradient_projection import (
+    PROJECTORS,
     gradient_projection,
     multi_objective_gradient_projection,
     normalized_gradient,
 )
 from .inverses import damped_pinv, null_space_projector, pinv, weighted_pinv
-from .joint_limits import joint_limit_gradient, joint_limit_index, joint_limit_weights
+from .joint_limits import (
+    LIMIT_CLEARANCE,
+    joint_limit_gradient,
+    joint_limit_gradient_bound,
+    joint_limit_index,
+    joint_limit_weights,
+)
 from .manipulability import (
     dexterous_task_priority,
     jacobian_derivatives,
@@ -38,7 +45,13 @@ from .manipulability import (
     sign_switch,
 )
 from .motion_distribution import motion_distribution
-from .payload import payload_moment, payload_objective, payload_objective_gradient
+from .payload import (
+    payload_moment,
+    payload_objective,
+    payload_objective_gradient,
+    static_tilt,
+    vehicle_payload_moment,
+)
 from .screws import (
     planar_chain_points,
     planar_chain_screws,
@@ -60,6 +73,7 @@ from .singularity_consistent import (
     self_motion_field,
     shoulder_term,
     signed_minor_null_vector,
+    singularity_crossings,
 )
 from .task_priority import (
     closed_loop_reference,
@@ -71,7 +85,9 @@ from .task_priority import (
 
 __all__ = [
     "DEFAULT_RULES",
+    "LIMIT_CLEARANCE",
     "PPPS_NAMES",
+    "PROJECTORS",
     "FuzzyRules",
     "FuzzyWeights",
     "closed_loop_reference",
@@ -85,6 +101,7 @@ __all__ = [
     "gradient_projection",
     "jacobian_derivatives",
     "joint_limit_gradient",
+    "joint_limit_gradient_bound",
     "joint_limit_index",
     "joint_limit_weights",
     "kinematic_constraint_inverse",
@@ -120,9 +137,12 @@ __all__ = [
     "shoulder_term",
     "sign_switch",
     "signed_minor_null_vector",
+    "singularity_crossings",
     "singularity_robust_task_priority",
     "skew",
     "sr_task_priority_closed_loop",
+    "static_tilt",
     "task_priority",
+    "vehicle_payload_moment",
     "weighted_pinv",
 ]

@@ -1,4 +1,4 @@
-"""Davies method with a virtual PPPS chain (``001_0fa6eac0390842e0.txt``, Eq. (5)-(8), (14)-(26)).
+"""Davies method with a virtual PPPS chain (dos Santos et al. (2006), Eq. (5)-(8), (14)-(26)).
 
 The UVMS is an open chain: the vehicle (itself a PPPS chain: three prismatic joints along the
 reference axes and a spherical joint, Eq. 5-8) followed by the arm. A virtual PPPS chain from the

@@ -1,6 +1,6 @@
 """A small fuzzy system for paper 003's weights beta, alpha_1 and alpha_2 (a reconstruction).
 
-``003_229789978cc4b235.txt`` takes its fuzzy system from another work (its reference 19) and does
+Wang et al. (2017) takes its fuzzy system from another work (its reference 19) and does
 not print the rule base. This module is this library's reconstruction, consistent with the text:
 
 - beta (arm share of the motion, Eq. 14) is high while the manipulability is high, and falls as the
@@ -91,7 +91,7 @@ def fuzzy_weights(
     payload_ratio: float = 0.0,
     rules: FuzzyRules = DEFAULT_RULES,
 ) -> FuzzyWeights:
-    """beta, alpha_1, alpha_2 for ``003_229789978cc4b235.txt, Eq. (14) and (23)`` (reconstruction).
+    """beta, alpha_1, alpha_2 for Wang et al. (2017), Eq. (14) and (23) (reconstruction).
 
     Args:
         manipulability_ratio: Normalised manipulability mu (clipped to [0, 1]).

@@ -16,8 +16,8 @@ from ._checks import FloatArray, jacobian, metric_root, nonneg
 def pinv(J: Any, rcond: float = 1e-10) -> FloatArray:
     """Moore-Penrose pseudoinverse ``J^+ = sum_i v_i u_i^T / sigma_i``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (11)``; equals ``J^T (J J^T)^{-1}`` of
-    ``003_229789978cc4b235.txt, Eq. (6)`` when ``J`` has full row rank.
+    Soylu et al. (2007), Eq. (11); equals ``J^T (J J^T)^{-1}`` of
+    Wang et al. (2017), Eq. (6) when ``J`` has full row rank.
 
     Args:
         J: (m, n) Jacobian (any units; the inverse has the reciprocal units).
@@ -61,7 +61,7 @@ def damped_pinv(
 ) -> FloatArray:
     """Damped least-squares inverse ``J^* = sum_i sigma_i / (sigma_i^2 + eta^2) v_i u_i^T``.
 
-    ``000_7b5f597fe4e36aa4.txt, Section 2.5`` (Nakamura and Hanafusa). It minimises
+    Soylu et al. (2007), Section 2.5 (Nakamura and Hanafusa). It minimises
     ``||J x - b||^2 + eta^2 ||x||_W^2``; with a metric W it is applied to ``J W^{-1/2}``.
     ``damping = 0`` gives the (weighted) pseudoinverse without truncation of small singular values.
 
@@ -91,7 +91,7 @@ def weighted_pinv(
 ) -> FloatArray:
     """Weighted pseudoinverse ``J_W^+ = W^{-1} J^T (J W^{-1} J^T)^{-1}``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (17)`` and ``003_229789978cc4b235.txt, Eq. (12)-(13)``. It gives
+    Soylu et al. (2007), Eq. (17) and Wang et al. (2017), Eq. (12)-(13). It gives
     the solution of ``J x = b`` of least ``x^T W x`` (bigger weight, smaller motion). Computed
     as ``W^{-1/2} (J W^{-1/2})^+``: Eq. (17) for full row rank, and still defined otherwise.
     Paper 003 specifies ``W^{-1}`` directly (Eq. 14, zeros allowed): pass ``inverse_weights``.
@@ -125,7 +125,7 @@ def null_space_projector(
 ) -> FloatArray:
     """Projector ``N = I - J_W^+ J`` onto the kernel of ``J`` (W-orthogonal in a metric W).
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (4) and (7)``; ``003_229789978cc4b235.txt, Eq. (7)``.
+    Soylu et al. (2007), Eq. (4) and (7); Wang et al. (2017), Eq. (7).
 
     Returns:
         (n, n) projector with ``J N = 0`` and ``N N = N``.

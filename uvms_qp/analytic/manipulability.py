@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from .._validation import as_scalar, as_vector
+from .._validation import as_array, as_scalar, as_vector
 from ..errors import NonFiniteError, ShapeError
 from ._checks import FloatArray, jacobian, metric_root, nonneg, rate
 from .inverses import _pinv
@@ -95,21 +96,35 @@ def shaping_function(rho: Any, rho_bar: float) -> Any:
         k = (1 + cos(pi * (rho - rho_bar/2) / (rho_bar/2))) / 2   for rho_bar/2 <= rho < rho_bar
 
     Args:
-        rho: Manipulability value(s) >= 0 (scalar or array).
+        rho: Manipulability value(s) >= 0 (a number or an array).
         rho_bar: Threshold > 0 (paper 000: 1.3).
 
     Returns:
-        k in [0, 1], a float for scalar input, else an array of rho's shape.
+        k in [0, 1], a float for a number, else an array of rho's shape.
+
+    Raises:
+        InputError: ``rho_bar`` not positive, or ``rho`` not real numbers.
+        NonFiniteError: ``rho`` holds NaN or inf.
     """
     rho_bar = as_scalar(rho_bar, "rho_bar", positive=True)
-    r = np.asarray(rho, dtype=np.float64)
+    if isinstance(rho, float | int) and not isinstance(rho, bool):
+        if not math.isfinite(rho):
+            raise NonFiniteError(f"rho: expected a finite number, got {rho}")
+        return _shaping(float(rho), rho_bar)
+    r = as_array(rho, "rho")
     if not np.isfinite(r).all():
         raise NonFiniteError("rho contains NaN or inf")
-    half = 0.5 * rho_bar
-    s = np.clip((r - half) / half, 0.0, 1.0)
-    k = 0.5 * (1.0 + np.cos(np.pi * s))
-    k = np.where(r < half, 1.0, np.where(r >= rho_bar, 0.0, k))
+    k = np.array([_shaping(x, rho_bar) for x in r.reshape(-1).tolist()]).reshape(r.shape)
     return float(k) if k.ndim == 0 else k
+
+
+def _shaping(rho: float, rho_bar: float) -> float:
+    half = 0.5 * rho_bar
+    if rho >= rho_bar:
+        return 0.0
+    if rho < half:
+        return 1.0
+    return 0.5 * (1.0 + math.cos(math.pi * (rho - half) / half))
 
 
 def sign_switch(rho_rate: float) -> float:

@@ -1,4 +1,4 @@
-"""Motion distribution between vehicle and arm (``003_229789978cc4b235.txt, Eq. (14)``)."""
+"""Motion distribution between vehicle and arm (Wang et al. (2017), Eq. (14))."""
 
 from __future__ import annotations
 

@@ -1,4 +1,14 @@
-"""Payload-moment objective of ``003_229789978cc4b235.txt, Eq. (20)-(21)``."""
+"""Payload moment: the objective of Wang et al. (2017), Eq. (20)-(21), and the vehicle's tilt.
+
+Wang et al. (2017) minimise ``M = (x_E^2 + y_E^2) F`` so that a vehicle without active roll and
+pitch control keeps "small pitch and roll angles"; the paper gives no model of that response.
+:func:`vehicle_payload_moment` and :func:`static_tilt` are this library's model of it: the
+moment of the load about the vehicle's centre of buoyancy, balanced by the hydrostatic restoring
+moment of a submerged vehicle whose centre of gravity lies a distance BG below its centre of
+buoyancy (Fossen, Handbook of Marine Craft Hydrodynamics and Motion Control, Wiley 2011,
+Section 4.1: with W = B the restoring moments are ``W BG cos(theta) sin(phi)`` in roll and
+``W BG sin(theta)`` in pitch; for a submerged body both metacentric heights equal BG).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import as_scalar, as_vector
-from ..errors import ShapeError
+from ..errors import InputError, ShapeError
 from ._checks import FloatArray, jacobian
 
 
@@ -61,3 +71,70 @@ def payload_objective_gradient(position: Any, position_jacobian: Any, force: flo
         )
     F = as_scalar(force, "force")
     return 2.0 * F * (p[0] * J[0] + p[1] * J[1])
+
+
+def vehicle_payload_moment(offset: Any, force: float) -> FloatArray:
+    """Roll and pitch moments of a vertical load on a level vehicle ``(m_x, m_y)`` [N m].
+
+    The load ``F`` acts along the body z axis (down; the vehicle is level), at ``offset`` from the
+    point the vehicle turns about (its centre of buoyancy, taken as the vehicle origin):
+    ``m = r x (0, 0, F) = (r_y F, -r_x F, 0)`` in body axes (x forward, y starboard, z down). A
+    load ahead of the centre (``r_x > 0``) pushes the nose down (``m_y < 0``).
+
+    Args:
+        offset: (3,) point of application in the vehicle frame [m] (only x and y are used).
+        force: Load F [N], positive down (weight minus buoyancy of the payload).
+
+    Returns:
+        (2,) ``[m_x, m_y]`` [N m].
+    """
+    r = as_vector(offset, "offset", 3)
+    F = as_scalar(force, "force")
+    return np.array([r[1] * F, -r[0] * F])
+
+
+def static_tilt(moment: Any, weight: float, metacentric_height: Any) -> FloatArray:
+    """Static roll and pitch ``(phi, theta)`` [rad] that balance a moment on a submerged vehicle.
+
+    Equilibrium of the hydrostatic restoring moment with an external moment ``(m_x, m_y)`` (body
+    axes, e.g. :func:`vehicle_payload_moment`)::
+
+        W GM_L sin(theta) = m_y,      W GM_T cos(theta) sin(phi) = m_x
+
+    with ``W`` the weight (= buoyancy) and ``GM_T``, ``GM_L`` the transverse and longitudinal
+    metacentric heights (both BG for a submerged vehicle). For small angles the tilt is the moment
+    over the restoring stiffness ``W GM``.
+
+    Args:
+        moment: (2,) ``[m_x, m_y]`` [N m].
+        weight: W [N], positive.
+        metacentric_height: GM [m], positive; a scalar (submerged: BG) or ``(GM_T, GM_L)``.
+
+    Returns:
+        (2,) ``[phi, theta]`` [rad].
+
+    Raises:
+        InputError: a moment larger than the restoring moment can balance (no upright
+            equilibrium: the vehicle would capsize), or non-positive W or GM.
+    """
+    m = as_vector(moment, "moment", 2)
+    W = as_scalar(weight, "weight", positive=True)
+    gm = np.atleast_1d(np.asarray(metacentric_height, dtype=np.float64))
+    gm = as_vector(np.repeat(gm, 2) if gm.size == 1 else gm, "metacentric_height", 2)
+    if np.any(gm <= 0.0):
+        raise InputError(f"metacentric_height: expected positive heights, got {gm.tolist()}")
+    k_roll, k_pitch = W * gm
+    sin_theta = m[1] / k_pitch
+    if abs(sin_theta) >= 1.0:
+        raise InputError(
+            f"moment: the pitch moment {m[1]:.4g} N m exceeds the restoring moment "
+            f"W GM_L = {k_pitch:.4g} N m (no upright equilibrium)"
+        )
+    theta = float(np.arcsin(sin_theta))
+    sin_phi = m[0] / (k_roll * np.cos(theta))
+    if abs(sin_phi) >= 1.0:
+        raise InputError(
+            f"moment: the roll moment {m[0]:.4g} N m exceeds the restoring moment "
+            f"W GM_T cos(theta) = {k_roll * np.cos(theta):.4g} N m (no upright equilibrium)"
+        )
+    return np.array([float(np.arcsin(sin_phi)), theta])

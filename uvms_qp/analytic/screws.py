@@ -1,4 +1,4 @@
-"""Screw-based differential kinematics (``001_0fa6eac0390842e0.txt``, Eq. (1)-(12)).
+"""Screw-based differential kinematics (dos Santos et al. (2006), Eq. (1)-(12)).
 
 A normalised screw is ``$ = [S; S_o x S]`` (Eq. 1): S the unit axis direction and ``S_o`` the
 position of a point on the axis, so that a twist ``$ Psi = [omega; V_O]`` (Eq. 2) holds the angular
@@ -25,7 +25,7 @@ from ._checks import FloatArray, jacobian
 
 
 def skew(v: Any) -> FloatArray:
-    """Skew matrix ``[v x]`` of a 3-vector (``001_..., Eq. (3)``'s W)."""
+    """Skew matrix ``[v x]`` of a 3-vector (dos Santos et al. (2006), Eq. (3)'s W)."""
     x, y, z = as_vector(v, "v", 3)
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
@@ -179,7 +179,7 @@ def planar_chain_screws(
     base_position: Any = (0.0, 0.0),
     base_yaw: float = 0.0,
 ) -> FloatArray:
-    """Screw Jacobian of a planar chain of revolute z joints (``001_..., Eq. (4)``).
+    """Screw Jacobian of a planar chain of revolute z joints (dos Santos et al. (2006), Eq. (4)).
 
     Returns:
         (6, n) normalised screws ``[0, 0, 1; y_i, -x_i, 0]`` at the joint points, in the reference

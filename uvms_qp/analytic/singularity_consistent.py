@@ -1,4 +1,4 @@
-"""Singularity-consistent (SC) method of ``002_1230892968c9c95c.txt``.
+"""Singularity-consistent (SC) method of Nenchev and Tsumaki.
 
 The end-effector path ``x(p)`` with unit tangent ``S`` closes the arm into one loop,
 ``H dq_bar = 0`` with the column-augmented Jacobian ``H = [J, -S]`` and ``q_bar = (q, p)``
@@ -27,7 +27,7 @@ Scale = Literal["paper", "minors"]
 def column_augmented_jacobian(J: Any, direction: Any) -> FloatArray:
     """Column-augmented Jacobian ``H = [J, -S]`` with ``S = direction / ||direction||``.
 
-    ``002_1230892968c9c95c.txt, Section 2.1, step 2`` (and Section 3 with ``S = v_hat``).
+    Nenchev and Tsumaki, Section 2.1, step 2 (and Section 3 with ``S = v_hat``).
 
     Args:
         J: (m, n) Jacobian.
@@ -47,7 +47,7 @@ def column_augmented_jacobian(J: Any, direction: Any) -> FloatArray:
 def signed_minor_null_vector(H: Any) -> FloatArray:
     """Kernel vector ``f_i = (-1)^(i+1) det H_i`` of an (m, m + 1) matrix.
 
-    ``002_1230892968c9c95c.txt, Section 2.1, step 3``: ``H_i`` is H without its i-th column
+    Nenchev and Tsumaki, Section 2.1, step 3: ``H_i`` is H without its i-th column
     (1-based). ``H f = 0`` holds identically (each row of ``H f`` is a determinant with a repeated
     row); f vanishes only where H loses rank, and it is a polynomial in H's entries, so it varies
     smoothly through singularities. Its norm is the product of H's singular values.
@@ -76,7 +76,7 @@ def _signed_minors(H: FloatArray) -> FloatArray:
 def sc_vector_field(J: Any, direction: Any) -> FloatArray:
     """SC vector field of a non-redundant arm: signed minors of ``[J, -S]``.
 
-    ``002_1230892968c9c95c.txt, Section 2.1``. The first n entries are joint rates per unit
+    Nenchev and Tsumaki, Section 2.1. The first n entries are joint rates per unit
     parameter, the last is the path rate ``dp``; its last entry is ``(-1)^n det J``, so at a
     kinematic singularity the end point stops while the joints keep moving.
 
@@ -104,7 +104,7 @@ def _links(d3: float, d5: float) -> tuple[float, float]:
 def sc_arm_position(q: Any, d3: float = 1.0, d5: float = 1.0) -> FloatArray:
     """Wrist-centre position of the 4-DOF positioning arm [m].
 
-    ``002_1230892968c9c95c.txt, Section 3, Fig. 1``: shoulder at the origin, joint 1 about +Z,
+    Nenchev and Tsumaki, Section 3, Fig. 1: shoulder at the origin, joint 1 about +Z,
     links d3 (upper arm) and d5 (forearm). Reconstructed by integrating the printed Jacobian;
     ``q = 0`` points the arm up (0, 0, d3 + d5), ``q = (0, 0, 0, -90 deg)`` gives (d5, 0, d3), the
     paper's initial point (1, 0, 1) m.
@@ -130,7 +130,7 @@ def sc_arm_position(q: Any, d3: float = 1.0, d5: float = 1.0) -> FloatArray:
 
 
 def sc_arm_jacobian(q: Any, d3: float = 1.0, d5: float = 1.0) -> FloatArray:
-    """Position Jacobian ``j_ij`` of the 4-DOF positioning arm (``002_..., Section 3``).
+    """Position Jacobian ``j_ij`` of the 4-DOF positioning arm (Nenchev and Tsumaki, Section 3).
 
     The printed ``j11`` lacks a factor ``S1`` in its first d5 term (``C4 S2`` should read
     ``C4 S1 S2``: at ``q1 = 0``, ``dx/dq1 = -y = d5 S3 S4``); this is the corrected entry. All other
@@ -167,7 +167,7 @@ def sc_arm_jacobian(q: Any, d3: float = 1.0, d5: float = 1.0) -> FloatArray:
 
 
 def shoulder_term(q: Any, d3: float = 1.0, d5: float = 1.0) -> float:
-    """The term ``c = (d3 + d5 C4) S2 + d5 C2 C3 S4`` of ``002_..., Section 3`` [m].
+    """The term ``c = (d3 + d5 C4) S2 + d5 C2 C3 S4`` of Nenchev and Tsumaki, Section 3 [m].
 
     It vanishes at the shoulder singularity (wrist centre on the Z axis) and divides the first two
     components of the paper-scaled fields.
@@ -195,7 +195,7 @@ def _scale_factor(q: Any, d3: float, d5: float, scale: Scale) -> float:
 def self_motion_field(
     q: Any, d3: float = 1.0, d5: float = 1.0, scale: Scale = "paper"
 ) -> FloatArray:
-    """Self-motion field ``f_sm`` of the 4-DOF arm (``002_1230892968c9c95c.txt, Section 3``).
+    """Self-motion field ``f_sm`` of the 4-DOF arm (Nenchev and Tsumaki, Section 3).
 
     Computed as the signed minors of the 3 x 4 Jacobian (the last minor, ``det J[:, :3]``, is
     identically zero because joints 1-3 meet at the shoulder), padded with ``dp = 0``. With
@@ -236,7 +236,7 @@ def end_point_field(
     d5: float = 1.0,
     scale: Scale = "paper",
 ) -> FloatArray:
-    """End-point field ``f_ep`` of the 4-DOF arm (``002_1230892968c9c95c.txt, Section 3``).
+    """End-point field ``f_ep`` of the 4-DOF arm (Nenchev and Tsumaki, Section 3).
 
     The kernel vector of ``H = [J, -v_hat]`` with no joint-3 rate: the signed minors of H without
     its third column, with a zero inserted at position 3. With ``scale="paper"`` it is divided by
@@ -267,7 +267,7 @@ def sc_blend(
     d5: float = 1.0,
     scale: Scale = "paper",
 ) -> FloatArray:
-    """Blended SC motion ``dq_bar = b_sm f_sm + b_ep f_ep`` (``002_..., Eq. (3)``).
+    """Blended SC motion ``dq_bar = b_sm f_sm + b_ep f_ep`` (Nenchev and Tsumaki, Eq. (3)).
 
     Args:
         q: (4,) joint angles [rad].
@@ -290,3 +290,72 @@ def sc_blend(
     if b_sm != 0.0:
         out = out + b_sm * _self_motion(J)
     return factor * out
+
+
+def singularity_crossings(
+    joints: Any,
+    times: Any,
+    d3: float = 1.0,
+    d5: float = 1.0,
+    shoulder_tolerance: float = 0.01,
+) -> list[tuple[float, str]]:
+    """Times at which a joint history of the 4-DOF arm passes through its singularities.
+
+    Nenchev and Tsumaki, Section 3, name two kinds: the extended/folded arm (``q4 = 0`` or
+    ``+/-pi``: ``sin q4`` changes sign; ``"extended"`` when ``cos q4 > 0``, else ``"folded"``) and
+    the shoulder singularity (the wrist centre on the Z axis: the term ``c`` of
+    :func:`shoulder_term` changes sign there, and the crossing counts when the wrist passes within
+    ``shoulder_tolerance`` of the axis, so a sign change of ``c`` away from the axis is not
+    reported). Crossing times are interpolated linearly between samples.
+
+    Args:
+        joints: (N, 4) joint angles [rad], one row per sample.
+        times: (N,) sample times [s], increasing.
+        d3: Upper-arm length [m].
+        d5: Forearm length [m].
+        shoulder_tolerance: Largest wrist distance from the Z axis at a shoulder crossing [m].
+
+    Returns:
+        ``[(t, kind), ...]`` in time order, kind ``"extended"``, ``"folded"`` or ``"shoulder"``.
+
+    Raises:
+        ShapeError: ``joints`` is not (N, 4) or ``times`` is not (N,).
+    """
+    q = np.asarray(joints, dtype=np.float64)
+    t = np.asarray(times, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != 4 or t.shape != (q.shape[0],):
+        raise ShapeError(
+            f"joints, times: expected shapes (N, 4) and (N,), got {q.shape} and {t.shape}"
+        )
+    d3, d5 = _links(d3, d5)
+    tol = as_scalar(shoulder_tolerance, "shoulder_tolerance", positive=True)
+    s4 = np.sin(q[:, 3])
+    c = np.array([shoulder_term(row, d3, d5) for row in q])
+    events: list[tuple[float, str]] = []
+    for i, j in _sign_changes(s4):
+        kind = "extended" if np.cos(q[i, 3]) > 0.0 else "folded"
+        events.append((_zero_time(t, s4, i, j), kind))
+    for i, j in _sign_changes(c):
+        radius = min(float(np.hypot(*sc_arm_position(q[k], d3, d5)[:2])) for k in range(i, j + 1))
+        if radius <= tol:
+            events.append((_zero_time(t, c, i, j), "shoulder"))
+    return sorted(events)
+
+
+def _sign_changes(values: FloatArray) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)`` of consecutive non-zero samples of opposite sign (zeros in between)."""
+    nonzero = np.flatnonzero(values != 0.0)
+    signs = np.sign(values[nonzero])
+    flips = np.flatnonzero(signs[:-1] != signs[1:])
+    return [(int(nonzero[f]), int(nonzero[f + 1])) for f in flips]
+
+
+def _zero_time(t: FloatArray, values: FloatArray, i: int, j: int) -> float:
+    """Time of the zero of ``values`` between samples ``i < j``.
+
+    The first exact zero sample between them, else linear interpolation between the two.
+    """
+    if j > i + 1:
+        return float(t[i + 1])
+    a, b = float(values[i]), float(values[j])
+    return float(t[i] + (t[j] - t[i]) * a / (a - b))

@@ -4,7 +4,7 @@ Nakamura's two-task form, its recursive p-task extension (Siciliano-Slotine) and
 singularity-robust variant (Chiaverini).
 
 With a metric W every formula is evaluated on ``J W^{-1/2}`` and mapped back by ``W^{-1/2}``, so
-each pseudoinverse is the weighted one of ``000_7b5f597fe4e36aa4.txt, Eq. (17)`` and each
+each pseudoinverse is the weighted one of Soylu et al. (2007), Eq. (17) and each
 projector ``I - J_W^+ J`` is W-orthogonal.
 """
 
@@ -49,8 +49,8 @@ def task_priority(
 ) -> FloatArray:
     """Two-task priority ``qdot = J1^+ x1 + N1 (J2 N1)^+ (x2 - J2 J1^+ x1)``, ``N1 = I - J1^+ J1``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (10)`` (Nakamura et al.); also ``001_0fa6eac0390842e0.txt,
-    Eq. (27)``. The secondary task is met as well as possible (least squares) without disturbing
+    Soylu et al. (2007), Eq. (10) (Nakamura et al.); also dos Santos et al. (2006),
+    Eq. (27). The secondary task is met as well as possible (least squares) without disturbing
     the primary one. Near an algorithmic singularity (``J2 N1`` losing rank) the rates grow
     without bound; the pseudoinverse truncates singular values below ``rcond * sigma_max``.
 
@@ -80,7 +80,7 @@ def recursive_task_priority(
     damping: float = 0.0,
     rcond: float = 1e-10,
 ) -> FloatArray:
-    """Recursive p-task priority (Siciliano-Slotine extension of ``000_..., Eq. (10)``).
+    """Recursive p-task priority (Siciliano-Slotine extension of Soylu et al. (2007), Eq. (10)).
 
     With ``qdot_0 = 0``, ``N_0 = I``::
 
@@ -89,7 +89,7 @@ def recursive_task_priority(
 
     ``N_k`` is the projector onto the kernel of the stacked ``[J_1; ...; J_k]``. For two tasks this
     is exactly Eq. (10). With ``damping > 0`` every ``(J_k N_{k-1})^+`` is replaced by the damped
-    least-squares inverse (``000_..., Section 2.5``). It is the closed-form reference of the
+    least-squares inverse (Soylu et al. (2007), Section 2.5). It is the closed-form reference of the
     lexicographic solver for equality levels with no active bound.
 
     Args:
@@ -147,7 +147,7 @@ def singularity_robust_task_priority(
 ) -> FloatArray:
     """Singularity-robust task priority ``qdot = J1^+ x1 + (I - J1^+ J1) J2^+ x2``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (15)`` and ``001_0fa6eac0390842e0.txt, Eq. (28)``
+    Soylu et al. (2007), Eq. (15) and dos Santos et al. (2006), Eq. (28)
     (Chiaverini). Each task is inverted on its own and the secondary rates are projected onto the
     kernel of the primary task: no algorithmic singularity, at the price of the secondary task not
     being met even when it could be. When the tasks do not conflict it equals Eq. (10).
@@ -181,7 +181,7 @@ def singularity_robust_task_priority(
 
 
 def closed_loop_reference(xdot_d: Any, error: Any, gain: Any) -> FloatArray:
-    """Closed-loop task rate ``xdot_d + K e`` (``000_7b5f597fe4e36aa4.txt, Eq. (16)``).
+    """Closed-loop task rate ``xdot_d + K e`` (Soylu et al. (2007), Eq. (16)).
 
     Args:
         xdot_d: (m,) desired task rate.
@@ -211,7 +211,7 @@ def sr_task_priority_closed_loop(
     inverse_weights: Any = None,
     damping: float = 0.0,
 ) -> FloatArray:
-    """Closed-loop singularity-robust task priority (``000_7b5f597fe4e36aa4.txt, Eq. (16)``).
+    """Closed-loop singularity-robust task priority (Soylu et al. (2007), Eq. (16)).
 
     ``qdot = J1^+ (xdot1_d + K1 e1) + (I - J1^+ J1) J2^+ (xdot2_d + K2 e2)``; paper 000 uses the
     weighted inverse with ``W = diag(10, 10, 10, 1, 1, 1)``, ``K1 = [10, 10]``,

@@ -189,33 +189,59 @@ def failure_lines(summaries: list[Summary]) -> list[str]:
     return out
 
 
+#: Columns of the terminal table (of :data:`HEADERS`): it fits :data:`TERMINAL_WIDTH` columns;
+#: the full table goes to ``--markdown`` / ``--csv``.
+TERMINAL_HEADERS: tuple[str, ...] = (
+    "solver", "success", "median us", "p99 us", "x daqp", "hard viol", "gap best", "NaN",
+)
+#: Width of the terminal table [characters].
+TERMINAL_WIDTH = 100
+
+
+def _terminal_cells(row: list[str]) -> list[str]:
+    cells = dict(zip(HEADERS, row, strict=True))
+    cells["success"] = cells["success"].split(" ")[-1].strip("()")  # "1.000 (30/30)" -> "30/30"
+    return [cells[h] for h in TERMINAL_HEADERS]
+
+
 def print_table(summaries: list[Summary], console: Any = None, title: str = "") -> None:
-    """Print the rich terminal table and the attributed failures."""
+    """Print the compact terminal table (one section per set) and the attributed failures.
+
+    The table has the columns :data:`TERMINAL_HEADERS` and fits :data:`TERMINAL_WIDTH`
+    characters; :func:`markdown_table` and the CSV store have every column.
+    """
+    from rich import box
     from rich.console import Console
     from rich.table import Table
 
-    console = console or Console()
-    table = Table(title=title or "uvms-qp bench", header_style="bold", show_lines=False)
-    for h in HEADERS:
-        table.add_column(h, justify="left" if h in ("set", "solver") else "right",
-                         no_wrap=True)
+    console = console or Console(width=TERMINAL_WIDTH)
+    table = Table(title=title or "uvms-qp bench", header_style="bold", box=box.SIMPLE_HEAD,
+                  pad_edge=False, show_edge=False, collapse_padding=True, title_justify="left")
+    for h in TERMINAL_HEADERS:
+        table.add_column(h, justify="left" if h == "solver" else "right", no_wrap=True)
     previous = None
     for row, s in zip(table_rows(summaries), [s for s in summaries if s.trials], strict=True):
-        if previous is not None and s.set != previous:
-            table.add_section()
+        if s.set != previous:
+            if previous is not None:
+                table.add_section()
+            table.add_row(f"[bold]{s.set}[/bold]", *[""] * (len(TERMINAL_HEADERS) - 1))
         previous = s.set
         style = None
         if s.success_rate < 1.0:
             style = "yellow"
         if s.claimed_violation > HARD_TOL or s.nan_count:
             style = "red"
-        table.add_row(*row, style=style)
+        table.add_row(*_terminal_cells(row), style=style)
     console.print(table)
+    console.print("success = verified/trials; x daqp = per-problem time ratio to daqp (median); "
+                  "hard viol = largest hard-row violation of a claimed success; gap best = "
+                  "largest per-level optimality gap to the best answer. All columns: "
+                  "--markdown FILE or --csv FILE.", markup=False, highlight=False)
     lines = failure_lines(summaries)
     if lines:
         console.print("[bold]failures (counted, by reason)[/bold]")
         for line in lines:
-            console.print(f"  {line}", markup=False)
+            console.print(f"  {line}", markup=False, highlight=False)
 
 
 def markdown_table(summaries: list[Summary]) -> str:

@@ -180,7 +180,7 @@ class Runner:
         return record
 
     # -- scenarios -------------------------------------------------------------------------
-    def _scenario_controller(self, scenario: Any) -> Any:
+    def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
         raise NotImplementedError
 
     def _run_scenario(self, problem: BenchProblem, record: Record) -> None:
@@ -188,10 +188,12 @@ class Runner:
         from ..sim.scenario import load_scenario
 
         scenario = load_scenario(str(problem.scenario))
-        controller = self._scenario_controller(scenario)
+        stack = scenario.build_stack()
+        controller = self._scenario_controller(scenario, stack)
         timed = _TimedStep(controller, scenario.model)
         steps = min(scenario.steps, int(problem.max_steps or scenario.steps))
-        result = simulate(scenario, timed, scheme_name=self.name, duration=steps * scenario.dt)
+        result = simulate(scenario, timed, stack=stack, scheme_name=self.name,
+                          duration=steps * scenario.dt)
         record.info.update({"model": scenario.model.name, "steps": result.steps,
                             "dt": scenario.dt})
         record.times_us = [t * 1e6 for t in timed.times]
@@ -347,8 +349,8 @@ class HqpRunner(Runner):
         self.name = solver
         self.solver = solver
 
-    def _scenario_controller(self, scenario: Any) -> Any:
-        return scenario.make_controller(self.solver)
+    def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
+        return scenario.make_controller(self.solver, stack=stack)
 
     def _uvms_controller(self, draw: Any) -> Any:
         from ..controller import Controller
@@ -382,10 +384,10 @@ class NullspaceRunner(Runner):
         rows = ctl.level_rows(scenario.model.state(scenario.q0), 0.0)
         return None if _all_equality_rows(rows) else "inequality tasks"
 
-    def _scenario_controller(self, scenario: Any) -> Any:
+    def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
         from ..controller import Controller
 
-        return Controller(scenario.model, scenario.stack, dt=scenario.dt, metric=scenario.metric,
+        return Controller(scenario.model, stack, dt=scenario.dt, metric=scenario.metric,
                           scheme="nullspace")
 
     def _uvms_controller(self, draw: Any) -> Any:
@@ -404,10 +406,10 @@ class WeightedRunner(Runner):
 
     name = "weighted"
 
-    def _scenario_controller(self, scenario: Any) -> Any:
+    def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
         from ..controller import Controller
 
-        return Controller(scenario.model, scenario.stack, solver=WEIGHTED_BACKEND,
+        return Controller(scenario.model, stack, solver=WEIGHTED_BACKEND,
                           dt=scenario.dt, metric=scenario.metric, scheme="weighted",
                           priority_ratio=PRIORITY_RATIO)
 
@@ -456,10 +458,10 @@ class SchemeRunner(Runner):
             return f"scenario does not name {self.scheme}"
         return None
 
-    def _scenario_controller(self, scenario: Any) -> Any:
+    def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
         from ..schemes import build_scheme
 
-        return build_scheme(self.scheme, scenario)
+        return build_scheme(self.scheme, scenario, stack=stack)
 
 
 class PinkRunner(Runner):
@@ -481,20 +483,20 @@ class PinkRunner(Runner):
         from ..sim.scenario import load_scenario
 
         scenario = load_scenario(str(problem.scenario))
-        task, trajectory = _tracking(scenario)
+        task, trajectory = _tracking(scenario, scenario.build_stack())
         if task is None or trajectory is None:
             return "no tracked frame with a trajectory"
         return pink_supported(scenario.model, task.frame)
 
-    def _scenario_controller(self, scenario: Any) -> Any:
-        task, trajectory = _tracking(scenario)
+    def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
+        task, trajectory = _tracking(scenario, stack)
         state = scenario.model.state(scenario.q0)
-        lo, hi = rate_box(scenario.constraints, state, scenario.dt, scenario.model.nv)
+        lo, hi = rate_box(stack.constraints, state, scenario.dt, scenario.model.nv)
         gain = getattr(task, "gain", 1.0)
         gain = float(np.max(gain)) if np.ndim(gain) else float(gain)
         return PinkController(scenario.model, scenario.dt, frame=task.frame,
                               trajectory=trajectory, gain=gain,
-                              position_gain=position_gain(scenario.constraints),
+                              position_gain=position_gain(stack.constraints),
                               rate_lower=lo, rate_upper=hi, qp_solver=self.qp_solver)
 
     def _uvms_controller(self, draw: Any) -> Any:
@@ -509,19 +511,11 @@ class PinkRunner(Runner):
                               rate_lower=lo, rate_upper=hi, qp_solver=self.qp_solver)
 
 
-def _tracking(scenario: Any) -> tuple[Any, Any]:
-    """The scenario's tracking task and its trajectory (None when missing)."""
-    name = getattr(scenario, "tracking", None)
-    if name is None:
+def _tracking(scenario: Any, stack: Any) -> tuple[Any, Any]:
+    """The scenario's tracking task in ``stack`` and its trajectory (None when missing)."""
+    if scenario.tracking is None:
         return None, None
-    task = scenario.task(name)
-    for level in scenario.data.get("levels", []):
-        for table in level.get("tasks", []):
-            if table.get("name", table.get("type")) == name:
-                ref = table.get("trajectory")
-                if isinstance(ref, str) and ref in scenario.trajectories:
-                    return task, scenario.trajectories[ref]
-    return task, None
+    return stack.task(scenario.tracking), scenario.tracking_trajectory
 
 
 # ------------------------------------------------------------------------------------ registry

@@ -1,8 +1,9 @@
-"""The ``uvms-qp`` command line.
+"""The ``uvms-qp`` command line (also ``python -m uvms_qp`` and ``python -m uvms_qp.cli``).
 
 Each sub-command lives in its own module of this package and exposes
 ``register(subparsers) -> argparse.ArgumentParser`` which sets ``func=run`` on its parser.
-Adding a command is a one-file change: the modules are discovered at start-up.
+Adding a command is a one-file change: the modules are discovered at start-up. Any error of the
+input (a scenario file, a model file, an option) is one line on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -12,13 +13,22 @@ import importlib
 import pkgutil
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from ..errors import UvmsQpError
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (the usage is one ``--help`` away)."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``PROG: error: MESSAGE (see PROG --help)`` on stderr and exit with status 2."""
+        self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the top-level parser with every discovered sub-command registered."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="uvms-qp",
         description="Task-priority kinematic control for underwater vehicle-manipulator systems.",
     )
@@ -46,8 +56,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except UvmsQpError as exc:
-        print(f"uvms-qp {args.command}: error: {exc}", file=sys.stderr)
+        print(f"uvms-qp {args.command}: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
+
+
+def one_line(message: str) -> str:
+    """A message on one line: its non-empty lines joined with ``"; "``."""
+    return "; ".join(line.strip() for line in message.splitlines() if line.strip())
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,9 +1,10 @@
-"""Argument set-up shared by the scenario sub-commands (``run``, ``compare``)."""
+"""Argument set-up shared by the sub-commands: plain help texts, model files, the output folder."""
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
 import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -11,6 +12,41 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
+
+_ROLE = re.compile(r":[a-z]+:`~?(?:[\w.]*\.)?([^`]+)`")
+
+
+def plain(doc: str | None) -> str:
+    """A docstring as plain text for ``--help``: no ``literal`` markup, roles or ``::``."""
+    text = _ROLE.sub(r"\1", doc or "")
+    text = text.replace("``", "")
+    return re.sub(r"::$", ":", text, flags=re.MULTILINE)
+
+
+def add_model_path(parser: argparse.ArgumentParser) -> None:
+    """Add ``--model-path FILE`` (repeatable): model files whose models scenarios may name."""
+    parser.add_argument(
+        "--model-path", action="append", default=[], metavar="FILE",
+        help="a model file (TOML, see docs/models.md) whose model scenarios can then name; "
+             "repeat for several",
+    )
+
+
+def register_model_paths(args: argparse.Namespace) -> list[str]:
+    """Register the models of ``args.model_path``; returns their names.
+
+    Raises:
+        ConfigError: an invalid model file, or two files naming the same model (``--model-path``).
+    """
+    from ..sim.model_file import register_model_file  # the model stack loads only when used
+
+    names: list[str] = []
+    for path in args.model_path:
+        name = register_model_file(path, replace=True)
+        if name in names:
+            raise ConfigError(f"two model files name the model {name!r}", "--model-path")
+        names.append(name)
+    return names
 
 
 def scenario_command(
@@ -26,13 +62,14 @@ def scenario_command(
     """Add a sub-command that runs a scenario and writes into an output directory.
 
     Its arguments: the positional ``scenario`` (TOML file or bundled name), ``--out DIR``
-    (required), the command's own ``options``, then ``--no-plots`` and ``--quiet``.
+    (required), the command's own ``options``, then ``--model-path``, ``--no-plots`` and
+    ``--quiet``.
 
     Args:
         subparsers: The ``uvms-qp`` sub-parsers.
         name: Sub-command name.
         help: One-line help in the command list.
-        description: Full description (the module docstring), shown verbatim.
+        description: Full description (the module docstring), shown as plain text.
         func: Handler stored as ``args.func``.
         quiet_help: Help of ``--quiet`` (what the command stops printing).
         options: Adds the command's own arguments.
@@ -43,13 +80,15 @@ def scenario_command(
     parser: argparse.ArgumentParser = subparsers.add_parser(
         name,
         help=help,
-        description=description,
+        description=plain(description),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("scenario", help="scenario file (.toml) or bundled scenario name")
+    parser.add_argument("scenario", help="scenario file (.toml) or bundled scenario name "
+                                         "(uvms-qp scenarios lists them)")
     parser.add_argument("--out", required=True, help="output directory")
     if options is not None:
         options(parser)
+    add_model_path(parser)
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     parser.add_argument("--quiet", action="store_true", help=quiet_help)
     parser.set_defaults(func=func)

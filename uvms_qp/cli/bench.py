@@ -8,7 +8,9 @@ and ``pink`` (when ``pin-pink`` is installed). A success is verified: finite, st
 level_infeasible, hard rows within 1e-7; every failure is counted with its reason.
 
 ``--json``/``--csv`` append to existing files and skip the (set, problem, solver) rows already
-there, so an interrupted run resumes. Examples::
+there, so an interrupted run resumes. The terminal table has the main columns and fits 100
+characters; ``--markdown`` and ``--csv`` have every column. Progress goes to standard error: a bar
+on a terminal, otherwise (a log, a pipe) a line per set and every 10 s. Examples::
 
     uvms-qp bench --quick
     uvms-qp bench --json out/bench.json --csv out/bench.csv --plot out/bench.png
@@ -18,8 +20,38 @@ there, so an interrupted run resumes. Examples::
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import time
 from typing import Any
+
+from ._common import plain
+
+#: Longest silence of the progress lines printed when standard error is not a terminal [s].
+PROGRESS_EVERY = 10.0
+
+
+class _LineProgress:
+    """Progress as plain lines, for CI logs and pipes.
+
+    A line for the first row of each set, then every :data:`PROGRESS_EVERY` seconds, and for the
+    last row.
+    """
+
+    def __init__(self, console: Any) -> None:
+        self.console = console
+        self.start = time.perf_counter()
+        self.last = -math.inf
+        self.set = ""
+
+    def update(self, done: int, total: int, label: str) -> None:
+        now = time.perf_counter()
+        current = label.split("/", 1)[0]
+        if current != self.set or done == total or now - self.last >= PROGRESS_EVERY:
+            self.set = current
+            self.last = now
+            self.console.print(f"bench: {done}/{total} rows, {now - self.start:.0f} s: {label}",
+                               markup=False, highlight=False, soft_wrap=True)
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -27,7 +59,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "bench",
         help="benchmark solvers and schemes (scenarios, random UVMS problems, raw hierarchies)",
-        description=__doc__,
+        description=plain(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--sets", nargs="+", metavar="SET",
@@ -51,7 +83,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--csv", metavar="FILE", help="append rows to this CSV file (resumable)")
     parser.add_argument("--plot", metavar="FILE", help="write a PNG of the times")
     parser.add_argument("--markdown", metavar="FILE", help="write the table as markdown")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (on a terminal) or progress lines (otherwise)")
     parser.set_defaults(func=run)
     return parser
 
@@ -63,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from ..bench import SetConfig, run_benchmark
-    from ..bench.report import markdown_table, plot, print_table
+    from ..bench.report import TERMINAL_WIDTH, markdown_table, plot, print_table
     from ..errors import InputError
 
     config = SetConfig.quick() if args.quick else SetConfig()
@@ -81,10 +114,14 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
     bar: Any = None
     task: Any = None
+    lines = _LineProgress(console)
 
     def progress(done: int, total: int, label: str) -> None:
         nonlocal bar, task
         if args.no_progress:
+            return
+        if not console.is_terminal:  # a log: a line now and then instead of a bar
+            lines.update(done, total, label)
             return
         if bar is None:
             from rich.progress import (
@@ -109,7 +146,9 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.stop()
-    out = Console(width=None if sys.stdout.isatty() else 250)
+    out = Console(width=TERMINAL_WIDTH)
+    if out.is_terminal:
+        out = Console(width=min(TERMINAL_WIDTH, out.size.width))
     machine = outcome.machine
     title = (f"uvms-qp bench: {machine.get('nproc')} CPUs ({machine.get('cpu')}), load "
              f"{' '.join(f'{v:.2f}' for v in machine.get('loadavg', []))}; "

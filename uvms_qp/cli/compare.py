@@ -16,7 +16,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._common import output_directory, scenario_command, writing_output
+from ._common import output_directory, register_model_paths, scenario_command, writing_output
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
@@ -56,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from ..sim.comparison_figures import plot_comparison
     from ..sim.scenario import load_scenario
 
+    register_model_paths(args)
     scenario = load_scenario(args.scenario)
     subset = None
     if args.schemes:
@@ -65,10 +66,11 @@ def run(args: argparse.Namespace) -> int:
         with writing_output(args.out):
             comparison.write(args.out)
             if not args.no_plots:
-                plot_comparison(comparison, scenario.model, args.out)
+                plot_comparison(comparison, scenario.model, args.out, progress=not args.quiet)
     if not args.quiet:
         _print_table(comparison)
-        print(f"results, comparison.md and figures in {args.out}")
+        figures = "" if args.no_plots else " and figures"
+        print(f"results, comparison.md{figures} in {args.out}")
     for note in comparison.notes():
         print(f"warning: {note}", file=sys.stderr)
     return 0

@@ -1,8 +1,9 @@
-"""``uvms-qp models [NAME]``: list the bundled models with their DOFs, or describe one.
+"""``uvms-qp models [NAME]``: list the models with their DOFs, or describe one.
 
-Without a name, one line per bundled model: name, size of ``zeta`` (vehicle + joints), vehicle
-kind with its actuated rates, and what the model is. With a name: source, frames, mount, joint
-limits and rate limits.
+Without a name, one line per model: name, size of ``zeta`` (vehicle + joints), vehicle kind with
+its actuated rates, and what the model is. The list holds the bundled models, the models of the
+``--model-path`` files and those that installed packages declare (``uvms_qp.models`` entry
+points). With a name: source, frames, mount, joint limits and rate limits.
 """
 
 from __future__ import annotations
@@ -12,16 +13,19 @@ from typing import Any
 
 import numpy as np
 
+from ._common import add_model_path, plain, register_model_paths
+
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``models`` sub-command to the ``uvms-qp`` parser."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "models",
-        help="list bundled models with their DOFs (or describe one)",
-        description=__doc__,
+        help="list the models with their DOFs (or describe one)",
+        description=plain(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("name", nargs="?", help="bundled model to describe in detail")
+    parser.add_argument("name", nargs="?", help="model to describe in detail")
+    add_model_path(parser)
     parser.set_defaults(func=run)
     return parser
 
@@ -40,7 +44,7 @@ def _fmt(values: Any) -> str:
 
 
 def _describe(name: str) -> str:
-    from ..model.bundled import load_model
+    from ..model import load_model
 
     model = load_model(name)
     mount = model.mount
@@ -62,18 +66,23 @@ def _describe(name: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the table of bundled models, or the details of ``args.name``."""
-    from ..model.bundled import bundled_entry, bundled_models, load_model
+    """Print the table of models, or the details of ``args.name``."""
+    from ..model import load_model, model_names
+    from ..model.registry import model_entry
 
+    register_model_paths(args)
     if args.name:
-        bundled_entry(args.name)  # unknown name -> UnknownModelError listing the models
-        print(_describe(args.name))
+        print(_describe(args.name))  # unknown name -> UnknownModelError listing the models
         return 0
     rows = []
-    for name in bundled_models():
+    for name in model_names():
         model = load_model(name)
         dofs = f"{model.nv} = {model.n_vehicle} + {model.n_joints}"
-        rows.append((name, dofs, _vehicle(model), bundled_entry(name).summary))
+        entry = model_entry(name)
+        summary = entry.summary
+        if entry.origin != "bundled":
+            summary = f"{summary} ({entry.origin})"
+        rows.append((name, dofs, _vehicle(model), summary.strip()))
     headers = ("model", "DOF (vehicle + joints)", "vehicle", "description")
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers)]
     for row in (headers, *rows):

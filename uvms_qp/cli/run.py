@@ -1,10 +1,13 @@
 """``uvms-qp run SCENARIO --out DIR``: run a scenario, write ``results.json`` and figures.
 
-``SCENARIO`` is a TOML file or the name of a bundled scenario (``uvms-qp run bluerov2_demo``).
-The scenario is fully validated before anything is written: an invalid file exits with status 2
-and a one-line message carrying the field path, without a traceback and without creating
-``DIR/results.json``. ``DIR`` is created before the simulation starts: an unusable ``--out`` (an
-existing file, a place that cannot be written) fails at once the same way.
+``SCENARIO`` is a TOML file or the name of a bundled scenario (``uvms-qp run bluerov2_demo``;
+``uvms-qp scenarios`` lists them). The scenario and the options are fully validated before
+anything is written: an invalid file or option exits with status 2 and a one-line message
+carrying the field path, without a traceback and without creating ``DIR/results.json``.
+``--duration`` obeys the scenario's limits (at least one control period, at most 2 000 000
+steps); the run takes ``round(duration / dt)`` steps and says so. ``DIR`` is created before the
+simulation starts: an unusable ``--out`` (an existing file, a place that cannot be written)
+fails at once the same way.
 """
 
 from __future__ import annotations
@@ -13,12 +16,17 @@ import argparse
 import sys
 from typing import Any
 
-from ._common import output_directory, scenario_command, writing_output
+from ..errors import ConfigError, UnknownSolverError
+from ._common import output_directory, register_model_paths, scenario_command, writing_output
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solver", help="override the scenario's solver (e.g. cascade:osqp)")
-    parser.add_argument("--duration", type=float, help="override the simulated time [s]")
+    parser.add_argument("--duration", type=float,
+                        help="override the simulated time [s] (at least one control period)")
+    parser.add_argument("--view", metavar="HTML",
+                        help="also write a 3-D animation of the run as one self-contained HTML "
+                             "file (needs plotly: pip install 'uvms-qp[view]')")
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -57,36 +65,45 @@ def _summary(metrics: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate, simulate; write ``results.json`` and the figures into ``args.out``."""
-    from ..errors import ConfigError, UnknownSolverError
     from ..sim.plots import plot_results
     from ..sim.results import write_results
     from ..sim.runner import simulate
     from ..sim.scenario import load_scenario
+    from ..sim.view import INSTALL_HINT, plotly_available, write_view
 
+    register_model_paths(args)
     scenario = load_scenario(args.scenario)
-    if args.duration is not None and not args.duration > 0.0:
-        raise ConfigError(f"expected a positive number of seconds, got {args.duration}",
-                          "--duration")
+    if args.duration is not None:
+        scenario = scenario.with_duration(args.duration, "--duration")
+    if args.view and not plotly_available():
+        raise ConfigError(f"the 3-D view needs plotly: {INSTALL_HINT}", "--view")
     try:
         scheme = scenario.make_controller(args.solver) if args.solver else None
     except UnknownSolverError as exc:
         raise ConfigError(str(exc), "--solver") from None
     with output_directory(args.out):
-        result = simulate(
-            scenario,
-            scheme,
-            duration=args.duration,
-            progress=not args.quiet,
-        )
+        result = simulate(scenario, scheme, progress=not args.quiet)
         if args.solver:
             result.solver = args.solver
         with writing_output(args.out):
             path = write_results(result, args.out)
-            figures = [] if args.no_plots else plot_results(result, args.out)
+            figures = [] if args.no_plots else plot_results(result, args.out,
+                                                            progress=not args.quiet)
+        if args.view:
+            try:
+                view = write_view(scenario.model, result, args.view)
+            except OSError as exc:
+                raise ConfigError(f"cannot write {args.view!r}: {exc.strerror or exc}",
+                                  "--view") from None
     if not args.quiet:
-        print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s in "
+        simulated = result.steps * result.dt
+        print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s ({simulated:g} s) in "
               f"{result.wall_time:.2f} s -> {path}"
-              + (f" and {len(figures)} figures" if figures else ""))
+              + (f" and {len(figures)} figures" if figures else "")
+              + (f"; 3-D view {view}" if args.view else ""))
+        if abs(simulated - scenario.duration) > 1e-9 * scenario.duration:
+            print(f"note: {scenario.duration:g} s is not a whole number of control periods; "
+                  f"ran the nearest, {simulated:g} s")
         print(_summary(result.metrics()))
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)

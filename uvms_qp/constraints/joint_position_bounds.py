@@ -49,11 +49,9 @@ class JointPositionBounds(Constraint):
         self.margin = as_scalar(margin, f"{self.name}.margin", nonnegative=True)
         self.joints = check_joint_list(joints, f"{self.name}.joints")
         self._cols = np.zeros(0, dtype=int)
-        self._idx = np.zeros(0, dtype=int)
-        self._lo = self._hi = np.zeros(0)
+        self._idx: Any = None  # constrained joints (None: all of them)
         self._lo_list: list[float] = []
         self._hi_list: list[float] = []
-        self._subset: list[int] | None = None  # constrained joints, None: all of them
 
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")
@@ -64,47 +62,36 @@ class JointPositionBounds(Constraint):
             j = int(idx[finite][np.flatnonzero(lo[finite] > hi[finite])[0]])
             raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
                              f"limits of joint {model.joint_names[j]!r}")
-        self._idx = compact_index(idx[finite])
+        kept = idx[finite]
+        self._idx = (None if kept.tolist() == list(range(model.n_joints))
+                     else compact_index(kept))
         self._cols = compact_index(model.n_vehicle + idx[finite])
-        self._lo, self._hi = lo[finite], hi[finite]
-        self._lo_list, self._hi_list = self._lo.tolist(), self._hi.tolist()
-        kept = idx[finite].tolist()
-        self._subset = None if kept == list(range(model.n_joints)) else kept
+        self._lo_list, self._hi_list = lo[finite].tolist(), hi[finite].tolist()
         return 0
-
-    def joint_band(self, q: FloatArray, dt: float) -> tuple[FloatArray, FloatArray]:
-        """Rate bounds ``(lower, upper)`` [rad/s] of the constrained joints at angles ``q``."""
-        k = self.gain / dt
-        lower = self._lo - q
-        lower *= k
-        upper = self._hi - q
-        upper *= k
-        np.minimum(lower, 0.0, out=lower)
-        np.maximum(upper, 0.0, out=upper)
-        return lower, upper
 
     def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
         """Intersect the joint-rate bounds into the box.
 
-        The operations of :meth:`joint_band` per joint in plain floats (cheaper than array
-        calls for the handful of joints of an arm), then one ``maximum``/``minimum`` per side
-        with the box (in place when the columns are consecutive).
+        Per joint in plain floats (a handful of joints: cheaper than array calls), read from
+        and written back to the box's columns in one call each.
         """
-        cols = self._cols  # the lists below are sized at bind
-        q = state.joint_floats()  # shared with the other consumers of this state
-        if self._subset is not None:
-            q = [q[i] for i in self._subset]
         k = self.gain / dt
-        band_lo = [min((a - x) * k, 0.0) for a, x in zip(self._lo_list, q, strict=False)]
-        band_hi = [max((b - x) * k, 0.0) for b, x in zip(self._hi_list, q, strict=False)]
-        if isinstance(cols, slice):  # views: intersect in place
-            view = lower[cols]
-            np.maximum(view, band_lo, out=view)
-            view = upper[cols]
-            np.minimum(view, band_hi, out=view)
-        else:
-            lower[cols] = np.maximum(lower[cols], band_lo)
-            upper[cols] = np.minimum(upper[cols], band_hi)
+        cols = self._cols
+        q = state.joints if self._idx is None else state.joints[self._idx]
+        new_lo = []
+        new_hi = []
+        for a, b, x, lo, hi in zip(self._lo_list, self._hi_list, q.tolist(),
+                                   lower[cols].tolist(), upper[cols].tolist(), strict=True):
+            v = (a - x) * k  # [rad/s]; a joint outside its band may stay or return
+            if v > 0.0:
+                v = 0.0
+            new_lo.append(v if v > lo else lo)
+            v = (b - x) * k
+            if v < 0.0:
+                v = 0.0
+            new_hi.append(v if v < hi else hi)
+        lower[cols] = new_lo
+        upper[cols] = new_hi
 
     def update(self, **params: Any) -> None:
         """Accepts ``gain``."""

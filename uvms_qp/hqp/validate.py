@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray, as_vector, check_bounds_order
+from .._validation import FloatArray, as_array, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
 from ..rows import Rows
 from .problem import Problem
@@ -40,10 +40,14 @@ _F64 = np.dtype(np.float64)
 
 
 def _float(value: Any) -> FloatArray:
-    """``value`` as a float64 array (no copy when it is one already)."""
+    """``value`` as a float64 array of real numbers (no copy when it is one already).
+
+    Raises:
+        InputError: not real numbers (strings, booleans, complex numbers are not converted).
+    """
     if type(value) is np.ndarray and value.dtype is _F64:
         return value
-    return np.asarray(value, dtype=np.float64)
+    return as_array(value, "value")
 
 
 def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None:
@@ -206,7 +210,7 @@ class Validator:
         if value is None:
             return default
         try:
-            side = np.asarray(value, dtype=np.float64)
+            side = _float(value)
         except (TypeError, ValueError):
             return None
         return side if side.shape == (n,) else None

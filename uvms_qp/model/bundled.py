@@ -207,12 +207,3 @@ def bundled_entry(name: str) -> BundledModel:
         return _REGISTRY[name]
     except (KeyError, TypeError):
         raise UnknownModelError(name, _REGISTRY) from None
-
-
-def load_model(name: str) -> Model:
-    """Build a bundled model by name (a fresh instance on every call).
-
-    Raises:
-        UnknownModelError: unknown name (the message lists the bundled models).
-    """
-    return bundled_entry(name).build()

@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._validation import as_scalar, as_vector
+from .._validation import as_array, as_scalar, as_vector
 from ..errors import (
     InputError,
     ModelError,
@@ -30,7 +30,7 @@ from ..errors import (
 from .dh import build_dh_arm
 from .state import State
 from .transforms import as_transform, to_se3
-from .urdf import load_urdf_arm
+from .urdf import check_path, load_urdf_arm
 from .vehicle import ETA_NAMES, Vehicle, check_joint_names, resolve_vehicle
 
 FloatArray = NDArray[np.float64]
@@ -41,6 +41,19 @@ STANDARD_FRAMES: tuple[str, ...] = ("world", "vehicle", "arm_base", "tool")
 QUATERNION_TOLERANCE = 1e-3
 _VEHICLE_JOINT = "vehicle_joint"
 _F64 = np.dtype(np.float64)
+
+
+def _unique_frame_names(model: pin.Model) -> None:
+    """Rename joint frames that share a link's name (legal in URDF; ambiguous to Pinocchio).
+
+    Links keep their names (they are the model's public frames); a joint frame becomes
+    ``"<name>:joint"``. The joint itself keeps its name.
+    """
+    bodies = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    for i, frame in enumerate(model.frames):
+        if frame.type != pin.FrameType.BODY and frame.name in bodies:
+            frame.name = f"{frame.name}:joint"
+            model.frames[i] = frame
 
 
 def _limits(value: Any, default: FloatArray, name: str, n: int) -> FloatArray:
@@ -76,8 +89,8 @@ class Model:
         source: Where the model comes from (paper, file).
         pin_model: The underlying Pinocchio model.
 
-    A model owns one Pinocchio ``Data`` buffer shared by the states it creates (see
-    :class:`~uvms_qp.model.state.State`); it is not thread-safe.
+    A model keeps a small pool of Pinocchio ``Data`` buffers that its states borrow for their
+    lifetime (see :class:`~uvms_qp.model.state.State`).
     """
 
     def __init__(
@@ -115,6 +128,7 @@ class Model:
         if clash:
             raise ModelError(f"model {self.name!r}: arm names {clash} are reserved")
 
+        _unique_frame_names(arm)
         base = pin.Model()
         base.name = self.name
         joint = vehicle.pin_joint()
@@ -134,12 +148,11 @@ class Model:
             placement = parent.placement * to_se3(tool_offset)
             tree.addFrame(pin.Frame("tool", parent.parentJoint, fparent, placement, op))
         self.pin_model: pin.Model = full
-        self._data = full.createData()
-        self._owner: object = None  # the State whose kinematics are in _data
+        # Pinocchio buffers lent to states (State takes one and gives it back when collected)
+        self._data_pool: list[Any] = []
         # the bare arm (root = arm_base) gives the arm-only Jacobian in arm_base axes directly
         self._arm_model: pin.Model = arm
-        self._arm_data = arm.createData()
-        self._arm_owner: object = None
+        self._arm_pool: list[Any] = []
 
         self.nq = int(full.nq)
         n_pin = int(full.nv)
@@ -155,12 +168,14 @@ class Model:
         self._columns = np.array(columns, dtype=np.intp)
         # None = zeta is Pinocchio's whole velocity (no column selection on the hot path)
         self._select: np.ndarray | None = None if len(columns) == n_pin else self._columns
-        # vehicle_pose_jacobian: actuated columns of the vehicle block (None: all of them)
+        # vehicle_pose_jacobian: where the entries of J(eta) with an actuated column go in the
+        # (eta_size, nv) matrix, and which entries those are (None: all of them)
         act = list(vehicle.actuated_indices)
-        self._eta_columns: list[int] | None = None if act == list(range(vehicle.nv)) else act
-        # flat positions of the (eta_size, nv_vehicle) block inside the (eta_size, nv) matrix
-        self._eta_block = np.array([r * self.nv + c for r in range(vehicle.eta_size)
-                                    for c in range(vehicle.nv)], dtype=np.intp)
+        pattern = vehicle.pose_jacobian_pattern
+        kept = [i for i, (_, c) in enumerate(pattern) if c in act]
+        self._eta_dst = np.array([pattern[i][0] * self.nv + act.index(pattern[i][1])
+                                  for i in kept], dtype=np.intp)
+        self._eta_src: list[int] | None = None if len(kept) == len(pattern) else kept
 
         self.frames: tuple[str, ...] = STANDARD_FRAMES + tuple(
             f for f in arm_frames if f not in STANDARD_FRAMES
@@ -302,10 +317,14 @@ class Model:
             source: Free text naming where the numbers come from.
 
         Raises:
-            ModelFileError: the file is missing or does not parse.
-            ModelError: unsupported joints, ambiguous tool.
+            InputError: ``path`` is not a path.
+            ModelFileError: the file is missing, too large, does not parse, or an element is
+                malformed (the message names it; see :mod:`uvms_qp.model.urdf`).
+            ModelError: unsupported joints (types, mimic), no moving joint, too many joints or
+                links, inconsistent limits, ambiguous tool.
             UnknownFrameError: ``tool`` is not a link of the URDF.
         """
+        path = check_path(path)
         arm = load_urdf_arm(path)
         if tool is None:
             if len(arm.leaves) != 1:
@@ -372,13 +391,8 @@ class Model:
             NonFiniteError: ``q`` holds NaN or inf.
             InputError: the vehicle orientation is far from unit norm.
         """
-        if type(q) is np.ndarray and q.dtype is _F64:
-            q = q.copy()  # fast path for the control loop
-        else:
-            try:
-                q = np.array(q, dtype=np.float64)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"q: expected numbers, got {type(q).__name__}") from exc
+        # a float64 array (the control loop) is copied; anything else must be real numbers
+        q = q.copy() if type(q) is np.ndarray and q.dtype is _F64 else np.array(as_array(q, "q"))
         if q.shape != (self.nq,):
             raise ShapeError(
                 f"q: expected shape ({self.nq},) for model {self.name!r} "

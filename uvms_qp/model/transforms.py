@@ -3,11 +3,17 @@
 A transform is a 4x4 homogeneous matrix ``T_a_b`` (pose of frame ``b`` in frame ``a``). Rotations
 from roll-pitch-yaw use the Z-Y-X Euler convention of Fossen and SNAME (and of URDF):
 ``R = Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
+
+The rotation conversions (quaternion -> matrix, matrix <-> roll-pitch-yaw) are written once, in
+plain floats with the floating-point operations of Pinocchio's (Eigen's) own routines, so their
+results equal Pinocchio's; the state computes the vehicle pose with them every tick, where a
+handful of float operations costs less than building arrays.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,18 +30,78 @@ FloatArray = NDArray[np.float64]
 R_FRD_FLU: FloatArray = np.diag([1.0, -1.0, -1.0])
 
 
+def quaternion_to_rotation(x: float, y: float, z: float, w: float) -> tuple[float, ...]:
+    """Rotation matrix of a unit quaternion, row-major as 9 floats.
+
+    The same floating-point operations as Eigen's ``Quaternion::toRotationMatrix`` (used by
+    Pinocchio), so the result is bit-identical to ``pin.Quaternion(w, x, y, z).toRotationMatrix()``
+    without the cost of building Pinocchio objects.
+    """
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    return (1.0 - (tyy + tzz), txy - twz, txz + twy,
+            txy + twz, 1.0 - (txx + tzz), tyz - twx,
+            txz - twy, tyz + twx, 1.0 - (txx + tyy))
+
+
+def rotation_to_rpy(R: Sequence[float]) -> tuple[float, float, float]:
+    """Z-Y-X Euler angles ``(roll, pitch, yaw)`` [rad] of a row-major rotation (9 floats).
+
+    ``R = Rz(yaw) Ry(pitch) Rx(roll)`` with pitch in ``[-pi/2, pi/2]``: the operations of
+    Pinocchio's ``rpy.matrixToRpy`` (Eigen's ``eulerAngles(2, 1, 0)`` folded into that range), in
+    plain floats; the tests check equality with Pinocchio.
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
+    yaw = math.atan2(r10, r00)
+    c2 = math.sqrt(r22 * r22 + r21 * r21)
+    if yaw < 0.0:
+        yaw += math.pi
+        pitch = math.atan2(-r20, -c2)
+    else:
+        pitch = math.atan2(-r20, c2)
+    s1, c1 = math.sin(yaw), math.cos(yaw)
+    roll = math.atan2(s1 * r02 - c1 * r12, c1 * r11 - s1 * r01)
+    if pitch < -0.5 * math.pi:
+        pitch += 2.0 * math.pi
+    if pitch > 0.5 * math.pi:
+        pitch = math.pi - pitch
+        roll = roll + math.pi if roll < 0.0 else roll - math.pi
+        yaw -= math.pi
+    return roll, pitch, yaw
+
+
+def rpy_to_rotation(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
+    """``Rz(yaw) Ry(pitch) Rx(roll)`` row-major as 9 floats.
+
+    The operations of Pinocchio's ``rpy.rpyToMatrix`` (a product of three axis-angle quaternions
+    turned into a matrix), in plain floats; the tests check equality with Pinocchio.
+    """
+    cz, sz = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    cy, sy = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    cx, sx = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    # q_z q_y, then (q_z q_y) q_x; each factor has a single non-zero vector component
+    aw, ax, ay, az = cz * cy, -(sz * sy), cz * sy, sz * cy
+    w = aw * cx - ax * sx
+    x = aw * sx + ax * cx
+    y = ay * cx + az * sx
+    z = az * cx - ay * sx
+    return quaternion_to_rotation(x, y, z, w)
+
+
 def rpy_to_matrix(rpy: Any) -> FloatArray:
     """Rotation matrix of roll-pitch-yaw angles ``[phi, theta, psi]`` [rad], Z-Y-X convention."""
     r = as_vector(rpy, "rpy", 3)
-    return np.asarray(pin.rpy.rpyToMatrix(r[0], r[1], r[2]), dtype=np.float64)
+    return np.array(rpy_to_rotation(*r.tolist())).reshape(3, 3)
 
 
-def matrix_to_rpy(rotation: FloatArray) -> FloatArray:
+def matrix_to_rpy(rotation: Any) -> FloatArray:
     """Roll-pitch-yaw ``[phi, theta, psi]`` [rad] of a rotation matrix (Z-Y-X convention).
 
     Pitch is returned in ``[-pi/2, pi/2]``, roll and yaw in ``[-pi, pi]``.
     """
-    return np.asarray(pin.rpy.matrixToRpy(np.asarray(rotation, dtype=np.float64)))
+    return np.array(rotation_to_rpy(as_matrix(rotation, "rotation", 3, 3).ravel().tolist()))
 
 
 def transform(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> FloatArray:

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from .._validation import as_vector
 from ..errors import InputError, ModelError
+from .transforms import quaternion_to_rotation, rotation_to_rpy, rpy_to_rotation
 
 FloatArray = NDArray[np.float64]
 VehicleKind = Literal["planar", "spatial", "fixed"]
@@ -46,95 +47,6 @@ ETA_NAMES: dict[str, tuple[str, ...]] = {
     "fixed": (),
 }
 _NQ = {"spatial": 7, "planar": 4, "fixed": 0}
-
-
-def quaternion_to_rotation(x: float, y: float, z: float, w: float) -> tuple[float, ...]:
-    """Rotation matrix of a unit quaternion, row-major as 9 floats.
-
-    The same floating-point operations as Eigen's ``Quaternion::toRotationMatrix`` (used by
-    Pinocchio), so the result is bit-identical to ``pin.Quaternion(w, x, y, z).toRotationMatrix()``
-    without the cost of building Pinocchio objects.
-    """
-    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
-    twx, twy, twz = tx * w, ty * w, tz * w
-    txx, txy, txz = tx * x, ty * x, tz * x
-    tyy, tyz, tzz = ty * y, tz * y, tz * z
-    return (1.0 - (tyy + tzz), txy - twz, txz + twy,
-            txy + twz, 1.0 - (txx + tzz), tyz - twx,
-            txz - twy, tyz + twx, 1.0 - (txx + tyy))
-
-
-def rotation_to_rpy(R: Sequence[float]) -> tuple[float, float, float]:
-    """Z-Y-X Euler angles ``(roll, pitch, yaw)`` [rad] of a row-major rotation (9 floats).
-
-    ``R = Rz(yaw) Ry(pitch) Rx(roll)`` with pitch in ``[-pi/2, pi/2]``: the operations of
-    Pinocchio's ``rpy.matrixToRpy`` (Eigen's ``eulerAngles(2, 1, 0)`` folded into that range), in
-    plain floats; the tests check equality with Pinocchio.
-    """
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
-    yaw = math.atan2(r10, r00)
-    c2 = math.sqrt(r22 * r22 + r21 * r21)
-    if yaw < 0.0:
-        yaw += math.pi
-        pitch = math.atan2(-r20, -c2)
-    else:
-        pitch = math.atan2(-r20, c2)
-    s1, c1 = math.sin(yaw), math.cos(yaw)
-    roll = math.atan2(s1 * r02 - c1 * r12, c1 * r11 - s1 * r01)
-    if pitch < -0.5 * math.pi:
-        pitch += 2.0 * math.pi
-    if pitch > 0.5 * math.pi:
-        pitch = math.pi - pitch
-        roll = roll + math.pi if roll < 0.0 else roll - math.pi
-        yaw -= math.pi
-    return roll, pitch, yaw
-
-
-def rpy_to_rotation(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
-    """``Rz(yaw) Ry(pitch) Rx(roll)`` row-major as 9 floats.
-
-    The operations of Pinocchio's ``rpy.rpyToMatrix`` (a product of three axis-angle quaternions
-    turned into a matrix), in plain floats; the tests check equality with Pinocchio.
-    """
-    cz, sz = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
-    cy, sy = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-    cx, sx = math.cos(0.5 * roll), math.sin(0.5 * roll)
-    # q_z q_y, then (q_z q_y) q_x; each factor has a single non-zero vector component
-    aw, ax, ay, az = cz * cy, -(sz * sy), cz * sy, sz * cy
-    w = aw * cx - ax * sx
-    x = aw * sx + ax * cx
-    y = ay * cx + az * sx
-    z = az * cx - ay * sx
-    return quaternion_to_rotation(x, y, z, w)
-
-
-def spatial_eta_and_rotation(qv: Any) -> tuple[list[float], tuple[float, ...]]:
-    """``eta`` [m, rad] and the rotation of a free-flyer configuration.
-
-    ``qv = [x, y, z, qx, qy, qz, qw]``; the rotation is 9 row-major floats, and both follow
-    Pinocchio's operations (:func:`quaternion_to_rotation`, :func:`rotation_to_rpy`).
-    """
-    x, y, z, qx, qy, qz, qw = qv.tolist() if isinstance(qv, np.ndarray) else qv
-    R = quaternion_to_rotation(qx, qy, qz, qw)
-    return [x, y, z, *rotation_to_rpy(R)], R
-
-
-def fossen_jacobian_values(R: Sequence[float], phi: float, theta: float) -> tuple[float, ...]:
-    """Fossen's ``J = blkdiag(R, T(phi, theta))`` (6 x 6), row-major floats.
-
-    ``003_229789978cc4b235.txt``, Eq. (2)-(3): ``R`` the body-to-world rotation (9 row-major
-    floats), ``T = [[1, s(phi) t(theta), c(phi) t(theta)], [0, c(phi), -s(phi)],
-    [0, s(phi)/c(theta), c(phi)/c(theta)]]`` [rad].
-    """
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
-    sphi, cphi = math.sin(phi), math.cos(phi)
-    ctheta, ttheta = math.cos(theta), math.tan(theta)
-    return (r00, r01, r02, 0.0, 0.0, 0.0,
-            r10, r11, r12, 0.0, 0.0, 0.0,
-            r20, r21, r22, 0.0, 0.0, 0.0,
-            0.0, 0.0, 0.0, 1.0, sphi * ttheta, cphi * ttheta,
-            0.0, 0.0, 0.0, 0.0, cphi, -sphi,
-            0.0, 0.0, 0.0, 0.0, sphi / ctheta, cphi / ctheta)
 
 
 @dataclass(frozen=True)
@@ -226,38 +138,68 @@ class Vehicle:
     def q_from_eta(self, eta: FloatArray) -> FloatArray:
         """Vehicle configuration from a pose ``eta`` (validated by the caller)."""
         if self.kind == "spatial":
-            quat = pin.Quaternion(pin.rpy.rpyToMatrix(eta[3], eta[4], eta[5]))
-            return np.concatenate((eta[:3], quat.coeffs()))
+            R = np.array(rpy_to_rotation(*eta[3:6].tolist())).reshape(3, 3)
+            return np.concatenate((eta[:3], pin.Quaternion(R).coeffs()))
         if self.kind == "planar":
             return np.array([eta[0], eta[1], math.cos(eta[2]), math.sin(eta[2])])
         return np.zeros(0)
 
-    def eta_from_q(self, qv: FloatArray) -> FloatArray:
-        """Vehicle pose ``eta`` from the vehicle configuration (angles in [rad])."""
-        return np.array(self.eta_values(qv))
+    def pose(self, qv: Sequence[float]) -> tuple[list[float], tuple[float, ...]]:
+        """``eta`` [m, rad] and ``R_world_body`` (9 row-major floats) of a vehicle configuration.
 
-    def eta_values(self, qv: Any) -> list[float]:
-        """:meth:`eta_from_q` as a list of floats (no array; for the per-tick state update).
-
-        Spatial: the rotation of the unit quaternion and its Z-Y-X Euler angles, computed with
-        the same floating-point operations as Pinocchio (:func:`quaternion_to_rotation`,
-        :func:`rotation_to_rpy`).
+        Spatial: the rotation of the unit quaternion ``qv[3:7]`` and its Z-Y-X Euler angles
+        (:func:`~uvms_qp.model.transforms.quaternion_to_rotation`,
+        :func:`~uvms_qp.model.transforms.rotation_to_rpy`); planar: ``[x, y, atan2(s, c)]``
+        (the rotation is not needed: empty); fixed: both empty.
         """
         if self.kind == "spatial":
-            return spatial_eta_and_rotation(qv)[0]
+            x, y, z, qx, qy, qz, qw = qv
+            R = quaternion_to_rotation(qx, qy, qz, qw)
+            return [x, y, z, *rotation_to_rpy(R)], R
         if self.kind == "planar":
-            x, y, c, s = qv.tolist() if isinstance(qv, np.ndarray) else qv
-            return [x, y, math.atan2(s, c)]
-        return []
+            x, y, c, s = qv
+            return [x, y, math.atan2(s, c)], ()
+        return [], ()
 
-    def pose_jacobian(self, eta: FloatArray) -> FloatArray:
-        """Full kinematic transformation ``eta_dot = J(eta) @ v`` over all vehicle DOFs.
+    def eta_from_q(self, qv: FloatArray) -> FloatArray:
+        """Vehicle pose ``eta`` [m, rad] of the vehicle configuration ``qv`` (see :meth:`pose`)."""
+        return np.array(self.pose(np.asarray(qv, dtype=np.float64).tolist())[0])
+
+    @property
+    def pose_jacobian_pattern(self) -> tuple[tuple[int, int], ...]:
+        """``(row, column)`` of the entries of :meth:`pose_jacobian` that can be non-zero."""
+        if self.kind == "spatial":
+            return tuple((r, c) for block in (0, 3) for r in range(block, block + 3)
+                         for c in range(block, block + 3))
+        if self.kind == "planar":
+            return ((0, 0), (0, 1), (1, 0), (1, 1), (2, 2))
+        return ()
+
+    def pose_jacobian_entries(self, eta: Sequence[float], rotation: Sequence[float]
+                              ) -> list[float]:
+        """The entries of :attr:`pose_jacobian_pattern` at ``eta`` [m, rad] (plain floats).
 
         Spatial (Fossen; ``003_229789978cc4b235.txt``, Eq. (2)-(3)):
-        ``J = blkdiag(R(Theta), T(Theta))`` with ``R = Rz(psi) Ry(theta) Rx(phi)`` and
-        ``T = [[1, s(phi) t(theta), c(phi) t(theta)], [0, c(phi), -s(phi)],
-        [0, s(phi)/c(theta), c(phi)/c(theta)]]`` (singular at ``theta = +/- pi/2``).
-        Planar: ``J = blkdiag(R2(psi), 1)``.
+        ``J = blkdiag(R(Theta), T(Theta))`` with ``R = Rz(psi) Ry(theta) Rx(phi)`` given as
+        ``rotation`` (9 row-major floats) and ``T = [[1, s(phi) t(theta), c(phi) t(theta)],
+        [0, c(phi), -s(phi)], [0, s(phi)/c(theta), c(phi)/c(theta)]]`` (singular at
+        ``theta = +/- pi/2``). Planar: ``J = blkdiag(R2(psi), 1)`` (``rotation`` unused).
+        """
+        if self.kind == "spatial":
+            phi, theta = eta[3], eta[4]
+            sphi, cphi = math.sin(phi), math.cos(phi)
+            ctheta, ttheta = math.cos(theta), math.tan(theta)
+            return [*rotation, 1.0, sphi * ttheta, cphi * ttheta, 0.0, cphi, -sphi,
+                    0.0, sphi / ctheta, cphi / ctheta]
+        if self.kind == "planar":
+            c, s = math.cos(eta[2]), math.sin(eta[2])
+            return [c, -s, s, c, 1.0]
+        return []
+
+    def pose_jacobian(self, eta: Any) -> FloatArray:
+        """Full kinematic transformation ``eta_dot = J(eta) @ v`` over all vehicle DOFs.
+
+        See :meth:`pose_jacobian_entries` (the rotation built from ``eta``).
 
         Args:
             eta: Vehicle pose [m, rad].
@@ -265,23 +207,13 @@ class Vehicle:
         Returns:
             ``(eta_size, nv_vehicle)`` matrix.
         """
-        return np.array(self.pose_jacobian_values(eta)).reshape(self.eta_size, self.nv)
-
-    def pose_jacobian_values(self, eta: Any) -> tuple[float, ...]:
-        """:meth:`pose_jacobian` as a flat row-major tuple of floats (for the state update).
-
-        The rotation block is built with the operations of Pinocchio's ``rpy.rpyToMatrix``
-        (:func:`rpy_to_rotation`), so the numbers equal those of a Pinocchio-built matrix.
-        """
-        if self.kind == "spatial":
-            angles = eta[3:6]
-            phi, theta, psi = (angles.tolist() if isinstance(angles, np.ndarray)
-                               else (float(a) for a in angles))
-            return fossen_jacobian_values(rpy_to_rotation(phi, theta, psi), phi, theta)
-        if self.kind == "planar":
-            c, s = math.cos(eta[2]), math.sin(eta[2])
-            return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
-        return ()
+        values = np.asarray(eta, dtype=np.float64).tolist()
+        R = rpy_to_rotation(*values[3:6]) if self.kind == "spatial" else ()
+        J = np.zeros((self.eta_size, self.nv))
+        for (r, c), v in zip(self.pose_jacobian_pattern, self.pose_jacobian_entries(values, R),
+                             strict=True):
+            J[r, c] = v
+        return J
 
 
 def resolve_vehicle(value: Any) -> Vehicle:

@@ -14,7 +14,8 @@ metric W, the current's heading, the payload force).
 | ``santos_sr_task_priority`` | 001, Eq. (28) |
 | ``nenchev_sc`` / ``nenchev_sc_self_motion`` | 002, Eq. (3) with b_sm = 0 / 1 |
 | ``wang_pseudoinverse`` | 003, Eq. (6) |
-| ``wang_fuzzy_gradient_projection`` | 003, Eq. (23) |
+| ``wang_fuzzy_gradient_projection`` | 003, Eq. (23), projector ``I - J_W^+ J`` |
+| ``wang_fuzzy_gradient_projection_euclidean`` | 003, Eq. (23), projector ``I - J^+ J`` |
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from .nenchev import NenchevSingularityConsistent
 from .santos import SantosKinematicConstraint, SantosTaskPriority
 from .scheme import Scheme
 from .soylu import SoyluDexterous, SoyluTaskPriority
-from .wang import WangFuzzyGradientProjection, WangPseudoinverse
+from .wang import WangEuclideanProjection, WangFuzzyGradientProjection, WangPseudoinverse
 
 
 class NenchevSelfMotion(NenchevSingularityConsistent):
@@ -62,49 +63,40 @@ SCHEME_TYPES: dict[str, type[Scheme]] = {
         NenchevSelfMotion,
         WangPseudoinverse,
         WangFuzzyGradientProjection,
+        WangEuclideanProjection,
     )
 }
 """Scenario scheme name -> scheme class (``"hqp"`` is the scenario's own stack)."""
 
 
-def _scenario_trajectory(scenario: Any) -> Any:
-    """The tool reference of a scenario: the tracking task's trajectory, else the only one."""
-    trajectories = dict(getattr(scenario, "trajectories", {}) or {})
-    name = getattr(scenario, "tracking", None)
-    data = getattr(scenario, "data", {}) or {}
-    for level in data.get("levels", []):
-        for table in level.get("tasks", []):
-            if table.get("name", table.get("type")) == name:
-                ref = table.get("trajectory")
-                if isinstance(ref, str) and ref in trajectories:
-                    return trajectories[ref]
-    if len(trajectories) == 1:
-        return next(iter(trajectories.values()))
-    return None
-
-
-def _options(cls: type[Scheme], scenario: Any) -> dict[str, Any]:
-    """Keyword arguments a scheme takes from the scenario it is compared in."""
+def _options(cls: type[Scheme], scenario: Any, stack: Any) -> dict[str, Any]:
+    """Keyword arguments a scheme takes from the scenario it is compared in and its stack."""
     options: dict[str, Any] = {}
-    if issubclass(cls, SoyluTaskPriority) and getattr(scenario, "metric", None) is not None:
+    if issubclass(cls, SoyluTaskPriority) and scenario.metric is not None:
         options["weights"] = [float(w) for w in np.asarray(scenario.metric)]
-    if issubclass(cls, SantosTaskPriority) and getattr(scenario, "current", None) is not None:
+    if issubclass(cls, SantosTaskPriority) and scenario.current is not None:
         options["heading"] = float(scenario.current.heading)
     if issubclass(cls, WangFuzzyGradientProjection):
-        for task in scenario.tasks():
+        for task in stack.tasks:
             if getattr(task, "type_name", "") == "payload_moment":
                 options["force"] = float(task.force)
                 break
     return options
 
 
-def build_scheme(name: str, scenario: Any, path: str = "schemes") -> Scheme:
-    """Build, bind and aim the scheme ``name`` for a loaded scenario.
+def build_scheme(name: str, scenario: Any, path: str = "schemes", *, stack: Any = None) -> Scheme:
+    """Build, bind and aim the scheme ``name`` for a scenario.
+
+    The scheme's keyword arguments are what it shares with the scenario (the metric W, the
+    current's heading, the payload force of the stack's payload task), overridden by the
+    scenario's ``[scheme_options.<name>]``; its tool reference is the scenario's
+    ``tracking_trajectory``.
 
     Args:
         name: Key of :data:`SCHEME_TYPES`.
         scenario: A :class:`~uvms_qp.sim.scenario.Scenario`.
         path: Field path used in error messages.
+        stack: The run's stack, read for the payload force (default: a new one of the scenario).
 
     Raises:
         ConfigError: unknown scheme (the known ones are listed), a model the scheme cannot
@@ -115,16 +107,17 @@ def build_scheme(name: str, scenario: Any, path: str = "schemes") -> Scheme:
         known = ", ".join(["hqp", *sorted(SCHEME_TYPES)])
         raise ConfigError(f"unknown scheme {name!r}; known schemes: {known}", path)
     try:
-        scheme = cls(**_options(cls, scenario))
+        options = _options(cls, scenario, scenario.build_stack() if stack is None else stack)
+        options.update(scenario.scheme_options.get(name, {}))
+        scheme = cls(**options)
         scheme.bind(scenario.model, scenario.dt)
         if cls.needs_trajectory:
-            trajectory = _scenario_trajectory(scenario)
-            if trajectory is None:
+            if scenario.tracking_trajectory is None:
                 raise ConfigError(
                     f"scheme {name!r} tracks the tool trajectory, but the scenario's tracking task "
                     "has none", path
                 )
-            scheme.track(trajectory)
+            scheme.track(scenario.tracking_trajectory)
     except ConfigError:
         raise
     except (UvmsQpError, ValueError) as exc:
@@ -143,6 +136,7 @@ __all__ = [
     "Scheme",
     "SoyluDexterous",
     "SoyluTaskPriority",
+    "WangEuclideanProjection",
     "WangFuzzyGradientProjection",
     "WangPseudoinverse",
     "build_scheme",

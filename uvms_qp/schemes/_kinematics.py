@@ -1,8 +1,8 @@
 """Kinematic quantities the paper schemes read from a model state (internal).
 
 Thin adapters from a :class:`~uvms_qp.model.State` to the library's formulas: the arm
-manipulability and its exact gradient (``000_7b5f597fe4e36aa4.txt, Eq. (18)-(19)``,
-``003_229789978cc4b235.txt, Eq. (18)-(19)``; computed by
+manipulability and its exact gradient (Soylu et al. (2007), Eq. (18)-(19),
+Wang et al. (2017), Eq. (18)-(19); computed by
 :func:`uvms_qp.tasks.manipulability_and_gradient`) and paper 003's payload objective
 (Eq. (20)-(21), :mod:`uvms_qp.analytic.payload`). Gradients are returned over zeta, with zeros on
 the vehicle columns: neither quantity depends on the vehicle pose.
@@ -56,7 +56,7 @@ def tool_in_base(state: State, frame: str = "tool") -> FloatArray:
 def payload_term(state: State, force: float, frame: str = "tool") -> tuple[float, FloatArray]:
     """Payload objective ``M = (x_E^2 + y_E^2) F`` and its gradient over zeta.
 
-    ``003_229789978cc4b235.txt, Eq. (20)-(21)``, with ``x_E``, ``y_E`` the tool coordinates in
+    Wang et al. (2017), Eq. (20)-(21), with ``x_E``, ``y_E`` the tool coordinates in
     the arm base frame and ``F`` [N] the load at the tool.
 
     Returns:

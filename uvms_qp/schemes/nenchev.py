@@ -3,13 +3,17 @@
 The column-augmented Jacobian ``H = [J, -v_hat]`` of the PA-10-like positioning arm has a
 two-dimensional kernel spanned by the self-motion field ``f_sm`` (no q4 rate, no path rate) and the
 end-point field ``f_ep`` (no q3 rate, path rate ``S4``), both from signed minors
-(``002_1230892968c9c95c.txt, Section 2.1 and 3``). The scheme commands "natural motion" (Eq. 3)::
+(Nenchev and Tsumaki, Section 2.1 and 3). The scheme commands "natural motion" (Eq. 3)::
 
     dq_bar = b_sm f_sm(q) + b_ep f_ep(q, v_hat),     zeta = dq_bar[:4],   p_dot = dq_bar[4]
 
-with constant ``b``: no trajectory and no feedback; the wrist centre moves along ``v_hat`` at the
-rate ``p_dot`` (dimensionless "speed" in m/s per unit b), which changes sign exactly at the
-extended/folded-arm singularity, so the arm passes through it with bounded joint rates. The
+with constant ``b``: no trajectory and no feedback (so no tool error; the diagnostics record
+``line_deviation`` [m], the wrist centre's distance from the line through its start point along
+``v_hat``). The wrist centre moves along ``v_hat`` at the rate ``p_dot`` (dimensionless "speed"
+in m/s per unit b), which changes sign exactly at the extended/folded-arm singularity, so the arm
+passes through it with bounded joint rates. The sign of a kernel vector is a convention: with the
+printed fields (``f_ep5 = S4``) the paper's first run moves toward -x; ``b_ep = -1`` gives the
+order of events its text describes (see docs/papers/002_nenchev.md). The
 fields are evaluated by :func:`uvms_qp.analytic.sc_blend` from the joint angles; the model's own
 Jacobian is the same matrix (checked in the tests).
 
@@ -30,6 +34,7 @@ import numpy as np
 from .._validation import FloatArray, as_scalar, as_vector
 from ..analytic.singularity_consistent import (
     end_point_field,
+    sc_arm_position,
     self_motion_field,
     shoulder_term,
 )
@@ -41,11 +46,12 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 class NenchevSingularityConsistent(Scheme):
-    """SC natural motion of the 4-DOF positioning arm, ``002_1230892968c9c95c.txt, Eq. (3)``.
+    """SC natural motion of the 4-DOF positioning arm, Nenchev and Tsumaki, Eq. (3).
 
     Args:
         direction: Wrist-centre direction v_hat in the base (world) frame (paper: (1, 0, 0)).
-        b_ep: End-point speed factor (paper: 1) [1/s].
+        b_ep: End-point speed factor (paper: 1; -1 gives the order of events the paper's text
+            describes for its first run) [1/s].
         b_sm: Self-motion speed factor (paper run 1: 0, run 2: 1) [1/s].
         d3: Upper-arm length [m] (paper: 1).
         d5: Forearm length [m] (paper: 1).
@@ -82,6 +88,7 @@ class NenchevSingularityConsistent(Scheme):
         self.shoulder_tolerance = as_scalar(shoulder_tolerance, "shoulder_tolerance", positive=True)
         self.path_length = 0.0
         self.shoulder_clamped = 0
+        self._start: FloatArray | None = None
 
     def _bind(self, model: Model) -> None:
         if model.n_joints != 4:
@@ -91,10 +98,11 @@ class NenchevSingularityConsistent(Scheme):
             )
 
     def reset(self) -> None:
-        """Reset the path parameter and the shoulder counter."""
+        """Reset the path parameter, the shoulder counter and the line's start point."""
         super().reset()
         self.path_length = 0.0
         self.shoulder_clamped = 0
+        self._start = None
 
     def fields(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Return ``(f_sm, f_ep)`` at joint angles ``q`` (paper scaling).
@@ -124,7 +132,13 @@ class NenchevSingularityConsistent(Scheme):
         f_sm, f_ep = self.fields(q)
         dq_bar = self.b_sm * f_sm + self.b_ep * f_ep
         self.path_length += float(dq_bar[4]) * (self.dt or 0.0)
+        wrist = sc_arm_position(q, self.d3, self.d5)
+        if self._start is None:
+            self._start = wrist
+        offset = wrist - self._start
         self.info = {
+            "line_deviation": float(np.linalg.norm(offset - (offset @ self.direction)
+                                                   * self.direction)),
             "path_rate": float(dq_bar[4]),
             "path": self.path_length,
             "f_sm4": float(f_sm[3]),

@@ -3,7 +3,7 @@
 Two schemes for a planar UVMS tracking a tool pose ``[x_E, y_E, psi_E]`` while the vehicle should
 stay at rest with its heading turned toward the current:
 
-* :class:`SantosKinematicConstraint`, built the paper's way (``001_0fa6eac0390842e0.txt``,
+* :class:`SantosKinematicConstraint`, built the paper's way (dos Santos et al. (2006),
   Eq. (5)-(8), (14)-(26)): screws of the vehicle's PPPS chain, of the arm joints and of a virtual
   PPPS chain closing the loop at the tool; the Davies circulation law ``N Psi = 0`` with the
   virtual (tool) and vehicle magnitudes imposed (primary, Eq. 25) gives the arm rates
@@ -51,7 +51,7 @@ def _wrap(angle: float) -> float:
 
 
 class SantosTaskPriority(Scheme):
-    """Singularity-robust task priority, ``001_0fa6eac0390842e0.txt, Eq. (28)``.
+    """Singularity-robust task priority, dos Santos et al. (2006), Eq. (28).
 
     Args:
         heading: Current direction psi_c the vehicle aligns to [rad] (paper: 0.78).
@@ -129,7 +129,7 @@ class SantosTaskPriority(Scheme):
 
 
 class SantosKinematicConstraint(SantosTaskPriority):
-    """Kinematic-constraint inverse by the Davies method, ``001_..., Eq. (19)-(26)``.
+    """Kinematic-constraint inverse by the Davies method, dos Santos et al. (2006), Eq. (19)-(26).
 
     Args:
         heading: Current direction psi_c [rad] (paper: 0.78).

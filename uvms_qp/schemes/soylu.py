@@ -4,7 +4,7 @@ Two schemes for a planar vehicle-manipulator whose primary task is the tool posi
 ``x_p = [x_e, y_e]`` and whose secondary task holds the vehicle pose ``x_s = [x_v, y_v, psi_v]``:
 
 * :class:`SoyluTaskPriority`, the closed-loop singularity-robust task priority with the weighted
-  pseudoinverse, ``000_7b5f597fe4e36aa4.txt, Eq. (16)-(17)``::
+  pseudoinverse, Soylu et al. (2007), Eq. (16)-(17)::
 
       zeta = J_W^+ (xdot_p + K_p e_p) + (I - J_W^+ J_p) J_s^+ (xdot_s + K_s e_s)
 
@@ -45,7 +45,7 @@ def _wrap(angle: float) -> float:
 
 
 class SoyluTaskPriority(Scheme):
-    """Closed-loop singularity-robust task priority, ``000_7b5f597fe4e36aa4.txt, Eq. (16)``.
+    """Closed-loop singularity-robust task priority, Soylu et al. (2007), Eq. (16).
 
     Args:
         weights: Diagonal of W over zeta (paper: ``[10, 10, 10, 1, 1, 1]``) [-].
@@ -116,7 +116,7 @@ class SoyluTaskPriority(Scheme):
 
 
 class SoyluDexterous(SoyluTaskPriority):
-    """Dexterous task priority with shaping function, ``000_7b5f597fe4e36aa4.txt, Eq. (21)``.
+    """Dexterous task priority with shaping function, Soylu et al. (2007), Eq. (21).
 
     Args:
         weights: Diagonal of W over zeta (paper: ``[10, 10, 10, 1, 1, 1]``).

@@ -2,7 +2,7 @@
 
 Two schemes for a UVMS whose task is the tool position (3 rows, world frame):
 
-* :class:`WangPseudoinverse`, ``003_229789978cc4b235.txt, Eq. (6)``: ``zeta = J^+ xdot`` with the
+* :class:`WangPseudoinverse`, Wang et al. (2017), Eq. (6): ``zeta = J^+ xdot`` with the
   plain pseudoinverse (vehicle and arm treated alike). The closed-loop reference
   ``xdot = xdot_d + K_e e`` is used here too, so the cases differ only in the redundancy
   resolution.
@@ -31,7 +31,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..analytic.fuzzy import fuzzy_weights
-from ..analytic.gradient_projection import multi_objective_gradient_projection
+from ..analytic.gradient_projection import check_projector, multi_objective_gradient_projection
 from ..analytic.inverses import pinv
 from ..analytic.joint_limits import joint_limit_weights
 from ..analytic.motion_distribution import motion_distribution
@@ -49,7 +49,7 @@ _LIMIT_MARGIN = 1e-6
 
 
 class WangPseudoinverse(Scheme):
-    """Pseudoinverse redundancy resolution, ``003_229789978cc4b235.txt, Eq. (6)``.
+    """Pseudoinverse redundancy resolution, Wang et al. (2017), Eq. (6).
 
     Args:
         gain: K_e per axis or scalar [1/s] (paper: 50).
@@ -87,7 +87,7 @@ class WangPseudoinverse(Scheme):
 
 
 class WangFuzzyGradientProjection(WangPseudoinverse):
-    """Fuzzy multitask weighted gradient projection, ``003_229789978cc4b235.txt, Eq. (23)``.
+    """Fuzzy multitask weighted gradient projection, Wang et al. (2017), Eq. (23).
 
     Args:
         gain: K_e [1/s] (paper: 50).
@@ -96,6 +96,9 @@ class WangFuzzyGradientProjection(WangPseudoinverse):
         limit_constants: C_i of Eq. (15)-(17), one per joint (paper: [10, 6, 10, 10, 10]).
         force: Payload force F at the tool [N] (case 1: 0; case 3: 50 % of ``force_max``).
         force_max: Payload capacity F_max [N] (fuzzy input ``F / F_max``).
+        projector: Null-space projector of the gradient term, ``"weighted"`` (``I - J_W^+ J``)
+            or ``"euclidean"`` (``I - J^+ J``); the paper's ``I - J_w^+ J_w`` allows both
+            readings (see :func:`uvms_qp.analytic.multi_objective_gradient_projection`).
         frame: Tool frame.
         name: Label in results.
     """
@@ -111,10 +114,12 @@ class WangFuzzyGradientProjection(WangPseudoinverse):
         limit_constants: Sequence[float] = (10.0, 6.0, 10.0, 10.0, 10.0),
         force: float = 0.0,
         force_max: float = 100.0,
+        projector: str = "weighted",
         frame: str = "tool",
         name: str | None = None,
     ) -> None:
         super().__init__(gain=gain, frame=frame, name=name)
+        self.projector = check_projector(projector)
         self.gradient_gain = as_scalar(gradient_gain, "gradient_gain", nonnegative=True)
         self.w_max = as_scalar(w_max, "w_max", positive=True)
         if self.w_max > 1.0:
@@ -170,6 +175,7 @@ class WangFuzzyGradientProjection(WangPseudoinverse):
             [weights.alpha_1, -weights.alpha_2],
             self.gradient_gain,
             inverse_weights=inverse_weights,
+            projector=self.projector,
         )
         self.info = {
             "manipulability": delta,
@@ -180,6 +186,35 @@ class WangFuzzyGradientProjection(WangPseudoinverse):
             "payload_objective": moment,
         }
         return zeta, {"tool": (err, "m")}
+
+
+class WangEuclideanProjection(WangFuzzyGradientProjection):
+    """Eq. (23) read with the Euclidean projector ``I - J^+ J`` of Eq. (7)-(10).
+
+    The same scheme as :class:`WangFuzzyGradientProjection` with ``projector="euclidean"`` by
+    default, under its own name so that one comparison can show both readings of the paper's
+    projector side by side.
+    """
+
+    type_name = "wang_fuzzy_gradient_projection_euclidean"
+
+    def __init__(
+        self,
+        *,
+        gain: float | Sequence[float] = 50.0,
+        gradient_gain: float = 0.2,
+        w_max: float = 0.02,
+        limit_constants: Sequence[float] = (10.0, 6.0, 10.0, 10.0, 10.0),
+        force: float = 0.0,
+        force_max: float = 100.0,
+        projector: str = "euclidean",
+        frame: str = "tool",
+        name: str | None = None,
+    ) -> None:
+        super().__init__(
+            gain=gain, gradient_gain=gradient_gain, w_max=w_max, limit_constants=limit_constants,
+            force=force, force_max=force_max, projector=projector, frame=frame, name=name,
+        )
 
 
 def _gain(value: Any) -> float | FloatArray:

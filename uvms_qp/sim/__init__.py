@@ -24,6 +24,7 @@ _LAZY: dict[str, str] = {
     "Phase": ".scenario",
     "load_scenario": ".scenario",
     "bundled_scenarios": ".scenario",
+    "register_model_file": ".model_file",
     "simulate": ".runner",
     "SimulationResult": ".runner",
     "compute_metrics": ".metrics",

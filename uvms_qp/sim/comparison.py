@@ -32,6 +32,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..errors import ConfigError
+from ._files import write_atomic
 
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
@@ -57,6 +58,9 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("step_time_median_us", "us"),
     ("nan_steps", ""),
 )
+
+#: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).
+UNTRACKED_METRICS = ("ee_error_max", "ee_error_rms", "ee_error_final")
 
 #: Largest hard-row violation (units of the rows: [m/s], [rad/s], ...) a run may show before the
 #: table flags it as exceeding the hard bounds.
@@ -197,7 +201,11 @@ class Comparison:
         return "\n".join(lines)
 
     def write(self, out_dir: str | Path) -> list[Path]:
-        """Write every run's ``results.json`` and diagnostics, and the comparison table."""
+        """Write every run's ``results.json`` and diagnostics, and the comparison table.
+
+        Every file is written atomically (mode 0644); a path there that is a symbolic link is
+        replaced, not followed.
+        """
         from .results import write_results
 
         directory = Path(out_dir)
@@ -213,11 +221,10 @@ class Comparison:
                 "series": {k: _json_list(v) for k, v in run.info.items()},
                 "metrics": {k: _json_value(v) for k, v in run.metrics.items()},
             }
-            info_path.write_text(json.dumps(payload, allow_nan=False), encoding="utf-8")
+            write_atomic(info_path, json.dumps(payload, allow_nan=False))
             written.append(info_path)
         md = directory / "comparison.md"
-        md.write_text(f"# {self.scenario}\n\n{self.description}\n\n{self.markdown()}\n",
-                      encoding="utf-8")
+        write_atomic(md, f"# {self.scenario}\n\n{self.description}\n\n{self.markdown()}\n")
         table = {
             "scenario": self.scenario,
             "schemes": [run.name for run in self.runs],
@@ -227,7 +234,7 @@ class Comparison:
             "notes": self.notes(),
         }
         js = directory / "comparison.json"
-        js.write_text(json.dumps(table, allow_nan=False, indent=1), encoding="utf-8")
+        write_atomic(js, json.dumps(table, allow_nan=False, indent=1))
         return [*written, md, js]
 
 
@@ -318,14 +325,18 @@ def compare(
         names = [n for n in names if n in schemes]
     runs = []
     for index, name in enumerate(names):
-        scenario = base.rebuild()
-        scheme = (scenario.make_controller() if name == "hqp"
-                  else build_scheme(name, scenario, f"schemes[{index}]"))
+        stack = base.build_stack()  # each run starts from fresh tasks, no event applied
+        scheme = (base.make_controller(stack=stack) if name == "hqp"
+                  else build_scheme(name, base, f"schemes[{index}]", stack=stack))
         recorder = _Recorder(scheme)
-        result = simulate(scenario, recorder, scheme_name=name, progress=progress)
+        result = simulate(base, recorder, stack=stack, scheme_name=name, progress=progress)
         if name != "hqp":
             result.solver = str(getattr(scheme, "solver_name", "closed-form"))
         metrics = dict(result.metrics())
-        metrics.update(extra_metrics(result, scenario.model))
+        metrics.update(extra_metrics(result, base.model))
+        if not getattr(scheme, "needs_trajectory", True):
+            # it follows no trajectory (e.g. natural motion): a tool error would be meaningless
+            for key in UNTRACKED_METRICS:
+                metrics.pop(key, None)
         runs.append(SchemeRun(name, result, recorder.arrays(), metrics))
     return Comparison(base.name, base.description, runs)

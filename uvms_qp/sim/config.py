@@ -45,25 +45,70 @@ class _NotHandled:
 NOT_HANDLED: Any = _NotHandled()
 
 
-def read_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file.
+#: Largest scenario or model file read [bytes]; a larger file is rejected before it is parsed.
+MAX_FILE_BYTES = 4 * 1024 * 1024
+#: Deepest nesting of arrays and tables in a file (the top-level table is depth 0).
+MAX_DEPTH = 32
+
+
+def read_toml(path: str | Path, what: str = "scenario file") -> dict[str, Any]:
+    """Parse a TOML file of at most :data:`MAX_FILE_BYTES` nested at most :data:`MAX_DEPTH` deep.
+
+    Args:
+        path: The file.
+        what: What the file is, for messages (``"scenario file"``, ``"model file"``).
 
     Raises:
-        ConfigError: the file cannot be read or is not valid TOML (message with line and column).
+        ConfigError: the file cannot be read, is too large, is not valid UTF-8 TOML (message with
+            line and column) or nests arrays and tables too deeply.
     """
     file = Path(path)
     try:
         with file.open("rb") as handle:
-            return tomllib.load(handle)
+            raw = handle.read(MAX_FILE_BYTES + 1)
     except FileNotFoundError as exc:
-        raise ConfigError(f"scenario file not found: {file}") from exc
+        raise ConfigError(f"{what} not found: {file}") from exc
     except OSError as exc:
-        raise ConfigError(f"cannot read scenario file {file}: {exc.strerror or exc}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{file}: malformed TOML: {exc}") from exc
+        raise ConfigError(f"cannot read {what} {file}: {exc.strerror or exc}") from exc
+    if len(raw) > MAX_FILE_BYTES:
+        raise ConfigError(f"{file}: larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB; "
+                          f"a {what} is at most {MAX_FILE_BYTES} bytes")
+    try:
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{file}: not UTF-8 text (byte {exc.start}): TOML files are UTF-8"
                           ) from exc
+    too_deep = ConfigError(f"{file}: arrays and tables nested more than {MAX_DEPTH} deep")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{file}: malformed TOML: {exc}") from exc
+    except RecursionError:  # the parser recurses once per nesting level
+        raise too_deep from None
+    if _depth(data) > MAX_DEPTH:
+        raise too_deep
+    return data
+
+
+def _depth(value: Any) -> int:
+    """Nesting depth of parsed TOML (the top-level table is 0, ``a = [1]`` is 1), no recursion."""
+    deepest = 0
+    pending: list[tuple[Any, int]] = [(value, 0)]
+    while pending:
+        node, depth = pending.pop()
+        if isinstance(node, dict | list):
+            deepest = max(deepest, depth)
+        if isinstance(node, dict):
+            pending.extend((child, depth + 1) for child in node.values())
+        elif isinstance(node, list):
+            pending.extend((child, depth + 1) for child in node)
+    return deepest
+
+
+def did_you_mean(key: str, known: Sequence[str]) -> str:
+    """``"; did you mean 'gain'?"`` when a known name is close to ``key``, else ``""``."""
+    close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.75)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def join(path: str, key: str | int) -> str:
@@ -282,8 +327,10 @@ class Table:
         """
         unknown = [key for key in self.data if key not in self._read]
         if unknown:
-            known = ", ".join(sorted(self._read)) or "(none)"
-            message = f"unknown key {unknown[0]!r}; known keys: {known}"
+            names = sorted(self._read.union(self.keys or ()))
+            known = ", ".join(names) or "(none)"
+            hint = did_you_mean(unknown[0], names)
+            message = f"unknown key {unknown[0]!r}; known keys: {known}{hint}"
             raise ConfigError(message, self.at(unknown[0]))
 
 
@@ -430,28 +477,36 @@ def config_error_from(
     return ConfigError(message, path)
 
 
-def construct(
+def keyword_arguments(
     cls: type,
     table: Table,
     *,
     skip: Sequence[str] = ("type",),
+    exclude: Sequence[str] = (),
     resolver: Resolver | None = None,
     kind: str = "",
-) -> Any:
-    """Build ``cls(**kwargs)`` from a TOML table by introspecting its keyword constructor.
+    label: str = "",
+) -> dict[str, Any]:
+    """Read a TOML table as the keyword arguments of ``cls``'s constructor, checked by type.
 
     Args:
-        cls: Class to instantiate (keyword constructor with simple type hints).
+        cls: Class whose keyword constructor (with simple type hints) the table describes.
         table: The table; keys in ``skip`` are read by the caller and ignored here.
         skip: Keys not passed to the constructor.
+        exclude: Constructor parameters a table may not set.
         resolver: Optional hook turning raw values into objects (trajectory references, ...).
         kind: Word used in messages (``"task"``, ``"constraint"``).
+        label: What the table describes in messages (default: the ``kind`` and ``type``, or the
+            class name).
+
+    Returns:
+        The converted keyword arguments (values the constructor itself still validates).
 
     Raises:
-        ConfigError: unknown key (known ones listed), missing required parameter, value of the
-            wrong type, or any validation error raised by the constructor, with the field path.
+        ConfigError: unknown key (known ones listed, a close one suggested), missing required
+            parameter or value of the wrong type, with the field path.
     """
-    parameters = keyword_parameters(cls)
+    parameters = {k: p for k, p in keyword_parameters(cls).items() if k not in exclude}
     hints = parameter_hints(cls)
     kwargs: dict[str, Any] = {}
     for key in skip:
@@ -461,8 +516,9 @@ def construct(
             continue
         if key not in parameters:
             known = ", ".join([*skip, *parameters])
-            label = f"{kind} type {table.data.get('type')!r}" if kind else cls.__name__
-            message = f"unknown key {key!r} for {label}; known keys: {known}"
+            what = label or (f"{kind} type {table.data.get('type')!r}" if kind else cls.__name__)
+            hint = did_you_mean(key, list(parameters))
+            message = f"unknown key {key!r} for {what}; known keys: {known}{hint}"
             raise ConfigError(message, table.at(key))
         table.raw(key)
         hint = hints.get(key, inspect.Parameter.empty)
@@ -480,7 +536,37 @@ def construct(
     if missing:
         raise ConfigError(f"missing required field {missing[0]!r}", table.path)
     table.finish()
+    return kwargs
+
+
+def instantiate(cls: type, kwargs: Mapping[str, Any], path: str) -> Any:
+    """``cls(**kwargs)``, with the constructor's own errors as :class:`ConfigError` at ``path``.
+
+    Raises:
+        ConfigError: the constructor rejected a value; a message that starts with a parameter
+            name moves it into the path (see :func:`config_error_from`).
+    """
     try:
         return cls(**kwargs)
     except (UvmsQpError, ValueError, TypeError) as exc:
-        raise config_error_from(exc, table.path, list(parameters), kwargs) from exc
+        raise config_error_from(exc, path, list(keyword_parameters(cls)), kwargs) from exc
+
+
+def construct(
+    cls: type,
+    table: Table,
+    *,
+    skip: Sequence[str] = ("type",),
+    resolver: Resolver | None = None,
+    kind: str = "",
+) -> Any:
+    """Build ``cls(**kwargs)`` from a TOML table by introspecting its keyword constructor.
+
+    :func:`keyword_arguments` then :func:`instantiate`.
+
+    Raises:
+        ConfigError: unknown key (known ones listed), missing required parameter, value of the
+            wrong type, or any validation error raised by the constructor, with the field path.
+    """
+    kwargs = keyword_arguments(cls, table, skip=skip, resolver=resolver, kind=kind)
+    return instantiate(cls, kwargs, table.path)

@@ -1,23 +1,52 @@
 """Figures of a run (PNG, headless matplotlib "Agg" back-end).
 
-One file per topic: ``tool_tracking.png`` (tool and target per axis, tracking error),
-``vehicle_pose.png`` (vehicle position and attitude), ``joints.png`` (joint angles against their
-limits), ``manipulability.png``, ``rates.png`` (every entry of zeta against its hard bounds),
-``residuals.png`` (per-level residual norms, log scale) and, with a payload task,
-``payload_moment.png``.
+One file per topic, each drawn only when the run has something to show:
+
+- ``tool_tracking.png``: tool and target per world axis (no ``z`` panel for a planar model) and
+  the tracking error;
+- ``vehicle_pose.png``: vehicle position and attitude (not for a fixed base);
+- ``joints.png``: joint positions, with their limits dashed when the joints have limits;
+- ``manipulability.png``: the measure in its unit, with the manipulability task's floor;
+- ``rates.png``: the command, every entry of zeta in its unit, with its hard box shaded (the
+  intersection of every constraint's bounds at each step);
+- ``residuals.png``: per-level residual norms (log scale), levels numbered from 0 as in
+  the ``summary()`` of a solve and of a control step;
+- ``payload_moment.png``: with a payload task.
+
+Dotted vertical lines mark the scenario's events. :func:`run_figures` gives the figures as
+matplotlib objects (to inspect or restyle); :func:`plot_results` writes them.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._figures import output_dir, pyplot, save
+from ._figures import (
+    Builder,
+    built,
+    min_span,
+    output_dir,
+    pyplot,
+    time_axis,
+    unit_label,
+    write_figures,
+)
+from .units import LINEAR_RATES
 
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
+
+#: Smallest vertical range of a position panel [m] and of an angle panel [rad].
+POSITION_SPAN = 0.02
+ANGLE_SPAN = 0.02
+#: Smallest vertical range of a command panel [m/s or rad/s].
+RATE_SPAN = 1e-6
+#: Residuals and errors below this are drawn at this value on log axes.
+LOG_FLOOR = 1e-12
 
 
 def _events(ax: Any, result: SimulationResult) -> None:
@@ -25,106 +54,212 @@ def _events(ax: Any, result: SimulationResult) -> None:
         ax.axvline(event["time"], color="0.6", linestyle=":", linewidth=1.0)
 
 
-def plot_results(result: SimulationResult, out_dir: str | Path) -> list[Path]:
-    """Write the figures of ``result`` into ``out_dir``; return their paths."""
-    plt = pyplot()
-    out = output_dir(out_dir)
-    t = result.time_states
-    ts = result.time
-    files: list[Path] = []
+def is_planar(result: SimulationResult) -> bool:
+    """True for a planar vehicle (pose ``[x, y, psi]``): its world ``z`` is identically 0."""
+    return bool(result.eta.shape[1] == 3)
 
-    fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
-    for i, label in enumerate("xyz"):
+
+def _zeta_units(result: SimulationResult) -> tuple[str, ...]:
+    if len(result.zeta_units) == len(result.zeta_names):
+        return tuple(result.zeta_units)
+    n_joints = len(result.joint_names)
+    vehicle = result.zeta_names[: len(result.zeta_names) - n_joints]
+    return (tuple("m/s" if n in LINEAR_RATES else "rad/s" for n in vehicle)
+            + ("rad/s",) * n_joints)
+
+
+def _joint_units(result: SimulationResult) -> tuple[str, ...]:
+    if len(result.joint_units) == len(result.joint_names):
+        return tuple(result.joint_units)
+    return ("rad",) * len(result.joint_names)
+
+
+def _tool_tracking(result: SimulationResult) -> Any:
+    plt = pyplot()
+    t = result.time_states
+    axes_names = "xy" if is_planar(result) else "xyz"
+    fig, axes = plt.subplots(len(axes_names) + 1, 1, figsize=(8, 2.2 * len(axes_names) + 2.4),
+                             sharex=True)
+    has_target = bool(np.isfinite(result.target_position).any())
+    for i, label in enumerate(axes_names):
         axes[i].plot(t, result.ee_position[:, i], label="tool")
-        axes[i].plot(t, result.target_position[:, i], "--", label="target")
+        if has_target:
+            axes[i].plot(t, result.target_position[:, i], "--", label="target")
         axes[i].set_ylabel(f"{label} [m]")
+        min_span(axes[i], result.ee_position[:, i], POSITION_SPAN)
         _events(axes[i], result)
     axes[0].legend(loc="best")
-    error = np.linalg.norm(result.ee_position - result.target_position, axis=1)
-    axes[3].semilogy(t, np.maximum(error, 1e-12))
-    axes[3].set_ylabel("|error| [m]")
-    axes[3].set_xlabel("t [s]")
-    fig.suptitle(f"{result.scenario}: tool tracking (world NED)")
-    files.append(save(fig, out / "tool_tracking.png"))
+    if has_target:
+        error = np.linalg.norm(result.ee_position - result.target_position, axis=1)
+        axes[-1].semilogy(t, np.maximum(error, LOG_FLOOR))
+    axes[-1].set_ylabel("|error| [m]")
+    _events(axes[-1], result)
+    time_axis(axes[-1])
+    fig.suptitle(f"{result.scenario}: tool tracking (world frame)")
+    return fig
 
+
+def _vehicle_pose(result: SimulationResult) -> Any:
+    size = result.eta.shape[1]
+    plt = pyplot()
+    t = result.time_states
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for i, label in enumerate("xyz"):
+    position_names = "xy" if is_planar(result) else "xyz"
+    for i, label in enumerate(position_names):
         axes[0].plot(t, result.vehicle_position[:, i], label=label)
     axes[0].set_ylabel("position [m]")
     axes[0].legend(loc="best")
-    angle_names = ("phi", "theta", "psi") if result.eta.shape[1] == 6 else ("psi",)
+    min_span(axes[0], result.vehicle_position[:, : len(position_names)], POSITION_SPAN)
+    angle_names = ("psi",) if size == 3 else ("phi", "theta", "psi")
+    angles = result.eta[:, size - len(angle_names):]
     for j, name in enumerate(angle_names):
-        axes[1].plot(t, result.eta[:, result.eta.shape[1] - len(angle_names) + j], label=name)
+        axes[1].plot(t, angles[:, j], label=name)
     if result.heading is not None:
         axes[1].axhline(result.heading, color="k", linestyle="--", label="current heading")
     axes[1].set_ylabel("attitude [rad]")
-    axes[1].set_xlabel("t [s]")
     axes[1].legend(loc="best")
+    min_span(axes[1], angles, ANGLE_SPAN)
+    time_axis(axes[1])
     for ax in axes:
         _events(ax, result)
     fig.suptitle(f"{result.scenario}: vehicle pose")
-    files.append(save(fig, out / "vehicle_pose.png"))
+    return fig
 
+
+def _joints(result: SimulationResult) -> Any:
     n = result.joints.shape[1]
-    fig, axes = plt.subplots(max(n, 1), 1, figsize=(8, 1.8 * max(n, 1) + 1), sharex=True,
-                             squeeze=False)
+    plt = pyplot()
+    t = result.time_states
+    units = _joint_units(result)
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.8 * n + 1), sharex=True, squeeze=False)
+    limited = False
     for j in range(n):
         ax = axes[j, 0]
         ax.plot(t, result.joints[:, j])
-        ax.axhline(result.joint_lower[j], color="r", linestyle="--")
-        ax.axhline(result.joint_upper[j], color="r", linestyle="--")
-        ax.set_ylabel(f"{result.joint_names[j]} [rad]")
-    axes[-1, 0].set_xlabel("t [s]")
-    fig.suptitle(f"{result.scenario}: joints and limits")
-    files.append(save(fig, out / "joints.png"))
+        for bound in (result.joint_lower[j], result.joint_upper[j]):
+            if np.isfinite(bound):
+                ax.axhline(bound, color="r", linestyle="--", linewidth=0.8)
+                limited = True
+        ax.set_ylabel(f"{result.joint_names[j]} [{units[j]}]")
+        _events(ax, result)
+    time_axis(axes[-1, 0])
+    fig.suptitle(f"{result.scenario}: joints" + (" (dashed: limits)" if limited else ""))
+    return fig
 
+
+def _manipulability(result: SimulationResult) -> Any:
+    plt = pyplot()
+    t = result.time_states
     fig, ax = plt.subplots(figsize=(8, 3.5))
-    ax.plot(t, result.manipulability)
-    ax.set_ylabel("manipulability")
-    ax.set_xlabel("t [s]")
+    ax.plot(t, result.manipulability, label="w")
+    floor = result.manipulability_floor
+    if floor is not None and np.isfinite(floor).any():
+        ax.plot(t, floor, "r--", linewidth=1.0, label="floor")
+        ax.legend(loc="best")
+    unit = result.manipulability_unit
+    ax.set_ylabel(f"manipulability w [{unit_label(unit)}]" if unit else "manipulability w")
+    time_axis(ax)
     _events(ax, result)
-    fig.suptitle(f"{result.scenario}: manipulability")
-    files.append(save(fig, out / "manipulability.png"))
+    fig.suptitle(f"{result.scenario}: manipulability (Yoshikawa)")
+    return fig
 
+
+def _rates(result: SimulationResult) -> Any:
     nv = result.zeta.shape[1]
-    cols = 2
-    rows = (nv + 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(10, 1.7 * rows + 1), sharex=True,
+    plt = pyplot()
+    ts = result.time
+    units = _zeta_units(result)
+    cols = 2 if nv > 1 else 1
+    rows = (nv + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 1.8 * rows + 1.2), sharex=True,
                              squeeze=False)
     for i in range(nv):
         ax = axes[i // cols, i % cols]
-        ax.plot(ts, result.zeta[:, i])
-        for bound in (result.zeta_lower[:, i], result.zeta_upper[:, i]):
+        lower = result.zeta_lower[:, i]
+        upper = result.zeta_upper[:, i]
+        ax.plot(ts, result.zeta[:, i], linewidth=1.0)
+        shown = [result.zeta[:, i]]
+        for bound in (lower, upper):
             if np.isfinite(bound).any():
-                ax.plot(ts, np.where(np.isfinite(bound), bound, np.nan), "r--", linewidth=0.8)
-        ax.set_ylabel(result.zeta_names[i])
+                finite = np.where(np.isfinite(bound), bound, np.nan)
+                ax.plot(ts, finite, "r--", linewidth=0.8)
+                shown.append(finite)
+        if np.isfinite(lower).any() or np.isfinite(upper).any():
+            ax.fill_between(ts, np.where(np.isfinite(lower), lower, np.nan),
+                            np.where(np.isfinite(upper), upper, np.nan),
+                            color="tab:red", alpha=0.08, linewidth=0)
+        ax.set_ylabel(f"{result.zeta_names[i]} [{units[i]}]")
+        min_span(ax, np.concatenate(shown), RATE_SPAN)
+        _events(ax, result)
     for i in range(nv, rows * cols):
         axes[i // cols, i % cols].axis("off")
-    fig.suptitle(f"{result.scenario}: commanded rates and hard bounds [m/s, rad/s]")
-    files.append(save(fig, out / "rates.png"))
+    for col in range(cols):  # the lowest drawn panel of each column carries the time axis
+        last = max(i for i in range(nv) if i % cols == col) // cols
+        time_axis(axes[last, col])
+    fig.suptitle(f"{result.scenario}: command zeta and its hard box (red dashed, shaded)")
+    return fig
 
+
+def _residuals(result: SimulationResult) -> Any:
+    values = result.level_residuals
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(9, 4))
-    for level in range(result.level_residuals.shape[1]):
-        values = result.level_residuals[:, level]
-        if np.isfinite(values).any():
-            label = f"level {level + 1}"
+    for level in range(values.shape[1]):
+        series = values[:, level]
+        if np.isfinite(series).any():
+            label = f"level {level}"
             if level < len(result.level_names):
                 label += f" ({result.level_names[level]})"
-            ax.semilogy(ts, np.maximum(values, 1e-12), label=label)
-    ax.set_ylabel("residual norm")
-    ax.set_xlabel("t [s]")
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="best", fontsize="small")
+            ax.semilogy(result.time, np.maximum(series, LOG_FLOOR), label=label)
+    ax.set_ylabel("residual norm (level units)")
+    time_axis(ax)
+    ax.legend(loc="best", fontsize="small")
     _events(ax, result)
-    fig.suptitle(f"{result.scenario}: per-level residuals")
-    files.append(save(fig, out / "residuals.png"))
+    fig.suptitle(f"{result.scenario}: per-level residuals (levels from 0, highest priority)")
+    return fig
 
+
+def _payload_moment(result: SimulationResult) -> Any:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    ax.plot(result.time_states, np.asarray(result.payload_moment))
+    ax.set_ylabel("payload moment [N m]")
+    time_axis(ax)
+    _events(ax, result)
+    fig.suptitle(f"{result.scenario}: payload moment F |(x_E, y_E)|")
+    return fig
+
+
+def _builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
+    """The run's figures that have something to show, as ``(file name, builder)``."""
+    yield "tool_tracking.png", lambda: _tool_tracking(result)
+    if result.eta.shape[1]:
+        yield "vehicle_pose.png", lambda: _vehicle_pose(result)
+    if result.joints.shape[1]:
+        yield "joints.png", lambda: _joints(result)
+    yield "manipulability.png", lambda: _manipulability(result)
+    if result.zeta.shape[1]:
+        yield "rates.png", lambda: _rates(result)
+    if np.isfinite(result.level_residuals).any():
+        yield "residuals.png", lambda: _residuals(result)
     if result.payload_moment is not None:
-        fig, ax = plt.subplots(figsize=(8, 3.5))
-        ax.plot(t, result.payload_moment)
-        ax.set_ylabel("payload moment [N m]")
-        ax.set_xlabel("t [s]")
-        _events(ax, result)
-        fig.suptitle(f"{result.scenario}: payload moment F |(x_E, y_E)|")
-        files.append(save(fig, out / "payload_moment.png"))
-    return files
+        yield "payload_moment.png", lambda: _payload_moment(result)
+
+
+def run_figures(result: SimulationResult) -> dict[str, Any]:
+    """The run's figures as matplotlib figures, by file name (close them when done)."""
+    return dict(built(_builders(result)))
+
+
+def plot_results(result: SimulationResult, out_dir: str | Path, *,
+                 progress: bool = False) -> list[Path]:
+    """Write the figures of ``result`` into ``out_dir``; return their paths.
+
+    Args:
+        result: The run.
+        out_dir: Output directory (created if needed). A figure path there that is a symbolic
+            link is replaced by the figure, never followed.
+        progress: Report the figures as they are written (on standard error).
+    """
+    return write_figures(_builders(result), output_dir(out_dir),
+                         label=f"{result.scenario} figures", progress=progress)

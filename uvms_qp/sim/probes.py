@@ -5,6 +5,8 @@
   (``000_7b5f597fe4e36aa4.txt, Eq. (18)``) of the tool's arm Jacobian in the arm-base frame,
   restricted to the rows a default :class:`~uvms_qp.tasks.ManipulabilityTask` uses (``x, y`` for
   planar vehicles, whose ``z`` row is zero; ``x, y, z`` otherwise).
+  Its unit (the task's, else ``m^k`` for k position rows) and, for a task in mode ``"floor"``,
+  the floor at each state.
 - Payload moment: ``M = (x_E^2 + y_E^2) F`` with ``(x_E, y_E)`` the tool position in the arm-base
   frame [m] and ``F`` the payload force [N] currently set on the payload task
   (``003_229789978cc4b235.txt, Eq. (20)``; [N m^2] as in the paper), through the task's
@@ -24,6 +26,7 @@ from .._validation import FloatArray
 from ..tasks.manipulability import default_rows
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..stack import Stack
     from .scenario import Scenario
 
 
@@ -42,8 +45,8 @@ def _has_value(type_name: str) -> Any:
     return predicate
 
 
-def _find_task(scenario: Scenario, predicate: Any) -> Any:
-    for task in scenario.tasks():
+def _find_task(stack: Stack, predicate: Any) -> Any:
+    for task in stack.tasks:
         if predicate(task):
             return task
     return None
@@ -54,18 +57,19 @@ class Probes:
 
     Args:
         scenario: The scenario being run.
+        stack: The run's stack (its tasks give the target, the measures and the payload force).
         size: Number of states to record (steps + 1).
     """
 
-    def __init__(self, scenario: Scenario, size: int) -> None:
+    def __init__(self, scenario: Scenario, stack: Stack, size: int) -> None:
         model = scenario.model
         self.model = model
-        self.tracked = scenario.task(scenario.tracking) if scenario.tracking else None
+        self.tracked = stack.task(scenario.tracking) if scenario.tracking else None
         self.frame = str(getattr(self.tracked, "frame", "tool")) if self.tracked else "tool"
-        self.manipulability_task = _find_task(scenario, _has_value("manipulability"))
-        self.payload_task = _find_task(scenario, _has_value("payload_moment"))
+        self.manipulability_task = _find_task(stack, _has_value("manipulability"))
+        self.payload_task = _find_task(stack, _has_value("payload_moment"))
         alignment = _find_task(
-            scenario, lambda t: getattr(t, "type_name", "") == "current_alignment"
+            stack, lambda t: getattr(t, "type_name", "") == "current_alignment"
         )
         heading: float | None = None
         if alignment is not None and getattr(alignment, "heading", None) is not None:
@@ -74,6 +78,12 @@ class Probes:
             heading = scenario.current.heading
         self.heading = heading
         self.manipulability_rows = default_rows(model)
+        task = self.manipulability_task
+        rows = len(self.manipulability_rows)
+        self.manipulability_unit = str(getattr(task, "error_unit", "")) if task else (
+            "m" if rows == 1 else f"m^{rows}")
+        has_floor = task is not None and getattr(task, "mode", "") == "floor"
+        self.manipulability_floor = np.full(size, np.nan) if has_floor else None
         self.has_yaw = getattr(model, "vehicle_kind", "fixed") != "fixed"
         self.eta = np.zeros((size, int(model.eta_size)))
         self.joints = np.zeros((size, int(model.n_joints)))
@@ -102,6 +112,8 @@ class Probes:
                     self.target_position[k] = position
         if self.manipulability_task is not None:
             self.manipulability[k] = float(self.manipulability_task.compute_value(state)[0])
+            if self.manipulability_floor is not None:
+                self.manipulability_floor[k] = self.manipulability_task.minimum
         else:
             J = state.arm_jacobian("tool")[self.manipulability_rows]
             self.manipulability[k] = yoshikawa(J)
@@ -125,6 +137,8 @@ class Probes:
         }
         if self.has_yaw and self.eta.shape[1]:
             data["yaw"] = self.eta[:, -1].copy()
+        if self.manipulability_floor is not None:
+            data["manipulability_floor"] = self.manipulability_floor
         if self.payload_moment is not None:
             data["payload_moment"] = self.payload_moment
             data["payload_objective"] = self.payload_objective

@@ -5,10 +5,12 @@ Top level: ``scenario``, ``scheme``, ``solver``, ``model``, ``dt`` [s], ``steps`
 scenario phase), ``events`` (applied run-time changes) and ``series``:
 
 - per state (N+1 entries, times ``time``): ``time`` [s], ``q``, ``vehicle_pose`` (eta [m, rad]),
-  ``joints`` [rad], ``ee_pose`` (tracked frame ``[x, y, z, qx, qy, qz, qw]``, world),
-  ``target_position`` [m], ``manipulability``, ``payload_moment`` [N m] and
-  ``payload_objective`` [N m^2] (when set);
-- per step (N entries, at ``time[:N]``): ``zeta`` [m/s, rad/s] (names in ``zeta_names``),
+  ``joints`` [rad or m, ``joint_units``], ``ee_pose`` (tracked frame
+  ``[x, y, z, qx, qy, qz, qw]``, world), ``target_position`` [m], ``manipulability``
+  [``manipulability_unit``], ``manipulability_floor`` (with a floor task), ``payload_moment``
+  [N m] and ``payload_objective`` [N m^2] (when set);
+- per step (N entries, at ``time[:N]``): ``zeta`` (names in ``zeta_names``, units in
+  ``zeta_units``: m/s, rad/s),
   ``zeta_lower``/``zeta_upper`` (hard box, ``null`` = unbounded), ``step_time_us``, ``status``,
   ``level_residuals``, ``bound_violation``, ``task_residuals`` (by task name, units in
   ``task_units``), ``stage`` (fallback stage that produced the command, ``"primary"`` on the
@@ -18,26 +20,83 @@ scenario phase), ``events`` (applied run-time changes) and ``series``:
 ``metrics`` also holds ``stage_counts`` (steps per stage), ``deadline_missed_steps`` and
 ``clipped_max``.
 
+``provenance`` (:func:`provenance`) says where the record comes from: the versions of the package,
+of Pinocchio, numpy, scipy, qpsolvers and every solver back-end, Python, the platform, the date
+(UTC) and the command line.
+
 Non-finite numbers are written as ``null`` (strict JSON). The file is written atomically (a
-temporary file renamed into place), so a failed run never leaves a partial ``results.json``.
+temporary file renamed into place, mode 0644), so a failed run never leaves a partial
+``results.json`` and a ``results.json`` that is a symbolic link is replaced, not followed.
 """
 
 from __future__ import annotations
 
+import datetime
 import json
 import math
-import os
-import tempfile
+import platform
+import shlex
+import sys
+from collections.abc import Sequence
+from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
+from .. import __version__
+from ._files import write_atomic
+
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
 
 RESULTS_FILE = "results.json"
+#: Distributions whose versions the provenance block records: the package, its numerical and
+#: kinematics libraries and every solver back-end (None when not installed).
+PROVENANCE_PACKAGES = ("uvms-qp", "numpy", "scipy", "pin", "qpsolvers", "daqp", "proxsuite",
+                       "osqp", "clarabel", "quadprog", "piqp", "highspy")
+
+
+def command_line(argv: Sequence[str] | None = None) -> str:
+    """``argv`` (default ``sys.argv``) as one shell-quoted line, the program named as typed.
+
+    ``sys.argv[0]`` is a full path: it becomes ``uvms-qp`` for the console script, ``python -m
+    uvms_qp`` for the package's ``__main__`` and the script's name otherwise.
+    """
+    if argv is not None:
+        return shlex.join(argv)
+    if not sys.argv:
+        return ""
+    program = Path(sys.argv[0])
+    name = f"python -m {program.parent.name}" if program.name == "__main__.py" else program.name
+    return " ".join([name, shlex.join(sys.argv[1:])]).strip()
+
+
+def provenance(command: Sequence[str] | None = None) -> dict[str, Any]:
+    """Where a result comes from: versions, Python, platform, date and command line.
+
+    Args:
+        command: The command that produced the result (default: this process's, see
+            :func:`command_line`).
+
+    Returns:
+        ``{"versions": {distribution: version or None}, "python", "platform", "date"`` (UTC,
+        ISO 8601) ``, "command"}``.
+    """
+    versions: dict[str, str | None] = {"uvms-qp": __version__}
+    for name in PROVENANCE_PACKAGES[1:]:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return {
+        "versions": versions,
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "command": command_line(command),
+    }
 
 
 def _clean(value: Any) -> Any:
@@ -66,8 +125,15 @@ def _ee_pose(result: SimulationResult) -> np.ndarray:
     return poses
 
 
-def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, Any]:
-    """The content of ``results.json`` for one run (see the module docstring)."""
+def results_dict(result: SimulationResult, *, series: bool = True,
+                 command: Sequence[str] | None = None) -> dict[str, Any]:
+    """The content of ``results.json`` for one run (see the module docstring).
+
+    Args:
+        result: The run.
+        series: Include the recorded series.
+        command: Command line of the provenance block (default: ``sys.argv``).
+    """
     data: dict[str, Any] = {
         "scenario": result.scenario,
         "scheme": result.scheme,
@@ -80,18 +146,22 @@ def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, 
         "metrics": result.metrics(),
         "phases": result.phase_metrics(),
         "events": result.events,
+        "provenance": provenance(command),
     }
     if series:
         record: dict[str, Any] = {
             "time": result.time_states,
             "zeta_names": list(result.zeta_names),
+            "zeta_units": list(result.zeta_units),
             "joint_names": list(result.joint_names),
+            "joint_units": list(result.joint_units),
             "q": result.q,
             "vehicle_pose": result.eta,
             "joints": result.joints,
             "ee_pose": _ee_pose(result),
             "target_position": result.target_position,
             "manipulability": result.manipulability,
+            "manipulability_unit": result.manipulability_unit,
             "zeta": result.zeta,
             "zeta_lower": result.zeta_lower,
             "zeta_upper": result.zeta_upper,
@@ -106,6 +176,8 @@ def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, 
             "clipped": result.clipped,
             "deadline_missed": result.deadline_missed,
         }
+        if result.manipulability_floor is not None:
+            record["manipulability_floor"] = result.manipulability_floor
         if result.payload_moment is not None:
             record["payload_moment"] = result.payload_moment
         if result.payload_objective is not None:
@@ -114,18 +186,17 @@ def results_dict(result: SimulationResult, *, series: bool = True) -> dict[str, 
     return _clean(data)  # type: ignore[no-any-return]
 
 
-def write_results(result: SimulationResult, out_dir: str | Path) -> Path:
-    """Write ``out_dir/results.json`` atomically and return its path."""
+def write_results(result: SimulationResult, out_dir: str | Path, *,
+                  command: Sequence[str] | None = None) -> Path:
+    """Write ``out_dir/results.json`` atomically (mode 0644) and return its path.
+
+    Args:
+        result: The run.
+        out_dir: Output directory (created if needed).
+        command: Command line of the provenance block (default: ``sys.argv``).
+    """
     directory = Path(out_dir)
     directory.mkdir(parents=True, exist_ok=True)
-    target = directory / RESULTS_FILE
-    text = json.dumps(results_dict(result), allow_nan=False, separators=(",", ":"))
-    fd, tmp = tempfile.mkstemp(prefix=".results-", suffix=".json", dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    text = json.dumps(results_dict(result, command=command), allow_nan=False,
+                      separators=(",", ":"))
+    return write_atomic(directory / RESULTS_FILE, text)

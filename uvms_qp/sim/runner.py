@@ -18,7 +18,6 @@ The result keeps plain numpy arrays; :mod:`uvms_qp.sim.metrics` turns them into 
 
 from __future__ import annotations
 
-import math
 import time as _time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -26,10 +25,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
-from ..errors import InputError
 from ..hqp import hard_violation
 from ..safety import STAGES
+from ..stack import Stack
 from .probes import Probes
+from .units import joint_units, zeta_units
 
 if TYPE_CHECKING:  # pragma: no cover
     from .scenario import Scenario
@@ -89,6 +89,11 @@ class SimulationResult:
         clipped: Amount the controller's final saturation removed from each command (N,)
             [m/s, rad/s] (0 for schemes that do not report it).
         deadline_missed: Whether each step overran the controller's ``deadline`` (N,).
+        zeta_units: Unit of each entry of zeta (:func:`uvms_qp.sim.units.zeta_units`).
+        joint_units: Unit of each joint position (``"rad"`` or ``"m"``).
+        manipulability_unit: Unit of ``manipulability`` (``"m^k"`` for k position rows).
+        manipulability_floor: Floor of the manipulability task per state (N+1,) (NaN while
+            none), or None without a floor task.
     """
 
     scenario: str
@@ -133,6 +138,10 @@ class SimulationResult:
     stage: list[str] = field(default_factory=list)
     clipped: FloatArray = field(default_factory=lambda: np.zeros(0))
     deadline_missed: list[bool] = field(default_factory=list)
+    zeta_units: tuple[str, ...] = ()
+    joint_units: tuple[str, ...] = ()
+    manipulability_unit: str = ""
+    manipulability_floor: FloatArray | None = None
 
     def metrics(self) -> dict[str, Any]:
         """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`) and the fallback ones.
@@ -226,6 +235,7 @@ def simulate(
     scenario: Scenario,
     scheme: Any = None,
     *,
+    stack: Stack | None = None,
     scheme_name: str = "hqp",
     duration: float | None = None,
     progress: bool = False,
@@ -233,32 +243,40 @@ def simulate(
     """Run a scenario in closed loop and record the series.
 
     Args:
-        scenario: A freshly loaded scenario (its tasks keep run-time state; see
-            :meth:`Scenario.rebuild`).
+        scenario: The scenario (a frozen specification; the run builds its own objects).
         scheme: Object with ``step(state, t) -> result`` (``.zeta``, ``.status``, ``.step_time``)
-            and ``reset()``; default: the scenario's HQP controller.
+            and ``reset()``; default: a controller of the scenario on ``stack``.
+        stack: The run's stack: the tasks the scenario's events update and the probes read, and
+            the constraints whose hard rows each command is checked against. Default: the
+            scheme's own ``stack`` when it has one (a
+            :class:`~uvms_qp.controller.Controller`), else a new one
+            (:meth:`~uvms_qp.sim.scenario.Scenario.build_stack`). A scheme that wraps a
+            controller must be given its controller's stack here.
         scheme_name: Name recorded in the results.
-        duration: Override of the scenario duration [s].
+        duration: Override of the scenario duration [s] (same step cap as the file's).
         progress: Show a progress bar when the run takes more than a few seconds.
 
     Raises:
-        InputError: a non-positive duration override.
+        ConfigError: a duration override that is not positive, shorter than one control period,
+            or beyond the step cap.
     """
+    if duration is not None:
+        scenario = scenario.with_duration(duration)
+    if stack is None:
+        own = getattr(scheme, "stack", None)
+        stack = own if isinstance(own, Stack) else scenario.build_stack()
     if scheme is None:
-        scheme = scenario.make_controller()
+        scheme = scenario.make_controller(stack=stack)
     reset = getattr(scheme, "reset", None)
     if callable(reset):
         reset()
     model = scenario.model
     dt = scenario.dt
-    total_time = scenario.duration if duration is None else float(duration)
-    if not total_time > 0.0 or not math.isfinite(total_time):
-        raise InputError(f"duration: expected a positive number of seconds, got {duration}")
-    n = max(1, round(total_time / dt))
+    n = scenario.steps
     nv, nq = int(model.nv), int(model.nq)
-    n_levels = len(scenario.stack.levels)
-    probes = Probes(scenario, n + 1)
-    constraints = list(scenario.constraints)
+    n_levels = len(stack.levels)
+    probes = Probes(scenario, stack, n + 1)
+    constraints = list(stack.constraints)
     n_lin = sum(1 for dof in getattr(model, "actuated", ()) if dof in ("u", "v", "w"))
 
     time: FloatArray = np.arange(n, dtype=np.float64) * dt
@@ -273,10 +291,10 @@ def simulate(
     clipped = np.zeros(n)
     missed: list[bool] = []
     level_res = np.full((n, n_levels), np.nan)
-    task_names = [task.name for task in scenario.tasks()]
+    task_names = [task.name for task in stack.tasks]
     task_res = {name: np.full(n, np.nan) for name in task_names}
     task_units: dict[str, str] = {
-        task.name: str(getattr(task, "rate_unit", "")) for task in scenario.tasks()
+        task.name: str(getattr(task, "rate_unit", "")) for task in stack.tasks
     }
     violation = np.zeros(n)
     speed = np.zeros(n)
@@ -296,7 +314,7 @@ def simulate(
         t = float(time[k])
         while pending and pending[0].time <= t + 1e-9:
             event = pending.pop(0)
-            scenario.task(event.task).update(**dict(event.update))
+            event.apply(stack)
             applied.append({"time": t, "task": event.task, "update": dict(event.update)})
         state = model.state(q)
         q_log[k] = q
@@ -375,9 +393,12 @@ def simulate(
         events=applied,
         wall_time=wall,
         phases={p.name: (p.start, p.end) for p in getattr(scenario, "phases", [])},
-        level_names=[", ".join(task.name for task in level.tasks)
-                     for level in scenario.stack.levels],
+        level_names=[", ".join(task.name for task in level.tasks) for level in stack.levels],
         stage=stage,
         clipped=clipped,
         deadline_missed=missed,
+        zeta_units=zeta_units(model),
+        joint_units=joint_units(model),
+        manipulability_unit=probes.manipulability_unit,
+        manipulability_floor=data.get("manipulability_floor"),
     )

@@ -1,72 +1,114 @@
-"""Scenarios: a model, an initial state, a stack, a solver and a time span, from a TOML file.
+"""Scenarios: the frozen specification of a closed-loop run, from a TOML file or from code.
 
 :func:`load_scenario` reads a scenario file (or a bundled scenario by name, see
-:func:`bundled_scenarios`) into a :class:`Scenario`. Validation is strict and complete before
-anything runs: every error is a :class:`~uvms_qp.errors.ConfigError` whose message starts with the
-field path (``levels[1].tasks[0].gain: expected a positive number, got -1.0``). The file format is
-described in ``docs/scenarios.md``.
+:func:`bundled_scenarios`) into a :class:`Scenario`: an immutable, validated description of the
+model, initial state, stack, solver, time span, schemes, events and phases. Validation is strict
+and complete before anything runs: every error is a :class:`~uvms_qp.errors.ConfigError` whose
+message starts with the field path (``levels[1].tasks[0].gain: expected a positive number, got
+-1.0``). The file format is described in ``docs/scenarios.md``.
 
-Tasks and constraints are built from the registries ``uvms_qp.tasks.TASK_TYPES`` and
-``uvms_qp.constraints.CONSTRAINT_TYPES`` by introspecting their keyword constructors
-(:func:`uvms_qp.sim.config.construct`), so a new task class is usable in scenario files as soon as
-it is registered.
+A scenario holds no run-time state. Each run builds its own objects from it::
+
+    scenario = load_scenario("bluerov2_demo")
+    stack = scenario.build_stack()                       # new tasks and constraints, bound
+    controller = scenario.make_controller(stack=stack)   # a controller on that stack
+    result = simulate(scenario, controller, stack=stack) # what simulate(scenario) does itself
+
+:meth:`Scenario.build` assembles a scenario in code from a model and a stack (used as a template:
+every run gets a copy).
 """
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray
+from .._validation import FloatArray, as_scalar, as_vector
+from ..constraints import CONSTRAINT_TYPES
+from ..controller import Controller
 from ..errors import ConfigError, InputError, UnknownNameError, UvmsQpError
-from .config import (
-    NOT_HANDLED,
-    Table,
-    config_error_from,
-    construct,
-    convert,
-    join,
-    keyword_parameters,
-    parameter_hints,
-    read_toml,
-)
+from ..hqp import available_solvers
+from ..model import Model, bundled_models, load_model, model_names
+from ..schemes import SCHEME_TYPES, build_scheme
+from ..stack import Stack
+from ..tasks import TASK_TYPES
+from .config import Table, did_you_mean, instantiate, join, keyword_arguments, read_toml
 from .current import ConstantCurrent
 from .integrators import Integrator
-from .trajectories import TRAJECTORY_TYPES, Trajectory
+from .model_file import MODEL_KEYS, model_from_table
+from .stack_tables import (
+    Event,
+    StackTables,
+    TaskResolver,
+    apply_events,
+    read_events,
+    read_stack,
+    read_trajectories,
+)
+from .trajectories import Trajectory
 
-#: Largest number of steps a scenario may ask for (duration / dt).
+#: Most control steps a run may take (``duration / dt``, command-line overrides included).
 MAX_STEPS = 2_000_000
+#: Shortest and longest control period [s].
+MIN_DT = 1e-6
+MAX_DT = 10.0
+#: Largest magnitude of an initial vehicle pose entry [m or rad].
+MAX_POSE = 1e6
 _SCENARIO_PACKAGE = "uvms_qp.scenarios"
 #: Keys of the top-level table (``docs/scenarios.md``); a required key is reported missing only
 #: when no other key is unknown, so a misspelt ``duration`` is named as the unknown key.
 _TOP_KEYS = (
     "name", "description", "model", "dt", "duration", "solver", "strict", "deadline", "metric",
-    "schemes", "integrator", "initial", "current", "passive", "trajectories", "constraints",
-    "levels", "events", "tracking", "phases",
+    "schemes", "scheme_options", "integrator", "initial", "current", "passive", "trajectories",
+    "constraints", "levels", "events", "tracking", "phases",
 )
 
+__all__ = [
+    "MAX_STEPS",
+    "Event",
+    "Phase",
+    "Scenario",
+    "bundled_scenarios",
+    "load_scenario",
+    "resolve_scenario",
+    "scenario_from_dict",
+    "step_count",
+]
 
-@dataclass(frozen=True)
-class Event:
-    """A run-time parameter change: at ``time`` [s], ``task.update(**update)``.
 
-    Attributes:
-        time: When the event fires [s] (at the first step with ``t >= time``).
-        task: Name of the task to update.
-        update: Keyword arguments passed to the task's ``update``.
-        path: Field path of the event in the scenario file (for messages).
+def step_count(duration: Any, dt: float, path: str = "duration") -> int:
+    """Number of control steps of a run, ``round(duration / dt)``, checked.
+
+    Args:
+        duration: Simulated time [s].
+        dt: Control period [s] (already checked).
+        path: Field or option named in messages (``"duration"``, ``"--duration"``).
+
+    Raises:
+        ConfigError: ``duration`` is not a positive finite number, is shorter than one control
+            period, or asks for more than :data:`MAX_STEPS` steps.
     """
-
-    time: float
-    task: str
-    update: Mapping[str, Any]
-    path: str = ""
+    if (not isinstance(duration, int | float) or isinstance(duration, bool)
+            or not math.isfinite(duration) or not duration > 0.0):
+        raise ConfigError(f"expected a positive number of seconds, got {duration!r}", path)
+    ratio = duration / dt  # inf when the quotient overflows
+    if not ratio <= MAX_STEPS + 0.5:
+        count = f"{ratio:.4g}" if math.isfinite(ratio) else "over 1e308"
+        raise ConfigError(f"{duration:g} s at dt = {dt:g} s is {count} steps; at most "
+                          f"{MAX_STEPS} are allowed", path)
+    if ratio < 1.0 - 1e-9:
+        raise ConfigError(f"{duration:g} s is shorter than one control period "
+                          f"(dt = {dt:g} s)", path)
+    return max(1, round(ratio))
 
 
 @dataclass(frozen=True)
@@ -78,128 +120,164 @@ class Phase:
     end: float
 
 
-@dataclass
-class Scenario:
-    """A fully validated, ready-to-run scenario.
+def _read_only(array: Any) -> FloatArray:
+    out = np.array(array, dtype=np.float64)
+    out.flags.writeable = False
+    return out
 
-    A scenario is used by one run: tasks keep run-time state (targets, events applied). Use
-    :meth:`rebuild` for a fresh copy.
+
+class _StackCopies:
+    """Fresh copies of a stack built in code (the model is shared, everything else is copied)."""
+
+    def __init__(self, stack: Stack, model: Model) -> None:
+        self._model = model
+        self._template = copy.deepcopy(stack, {id(model): model})
+
+    def __call__(self) -> Stack:
+        return copy.deepcopy(self._template, {id(self._model): self._model})
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """The frozen specification of a closed-loop run.
+
+    Nothing here changes during a run: :meth:`build_stack` and :meth:`make_controller` build the
+    objects of each run.
 
     Attributes:
         name: Scenario name.
         description: Free text.
         model: The :class:`~uvms_qp.model.Model`.
-        q0: Initial configuration (nq,).
-        stack: The :class:`~uvms_qp.stack.Stack` (levels of tasks and hard constraints).
-        constraints: The stack's hard constraints (same objects as ``stack.constraints``).
-        trajectories: Named trajectories defined by the file.
-        solver: Solver name (``"daqp"``, ``"cascade:<backend>"``, ...).
-        metric: Diagonal metric W (nv,) of the final minimum-norm regularisation, or None.
+        q0: Initial configuration (nq,), read-only.
         dt: Control period [s].
         duration: Simulated time [s].
-        events: Run-time parameter changes, sorted by time.
-        current: Optional constant current.
-        integrator: The configured :class:`~uvms_qp.sim.integrators.Integrator`.
-        schemes: Schemes to compare (``"hqp"`` always first).
-        tracking: Name of the task whose target is the tool reference in the metrics, or None.
-        phases: Named time windows with their own metrics.
-        source: File the scenario came from, when any.
+        solver: Solver name (``"daqp"``, ``"cascade:<backend>"``, ...).
+        metric: Diagonal metric W (nv,) of the final minimum-norm regularisation (read-only), or
+            None.
         strict: The controller raises :class:`~uvms_qp.errors.NoSolutionFound` instead of
             degrading when no back-end returns a verified solution (``docs/reliability.md``).
         deadline: Wall-time budget of one controller step [s], or None for none.
+        schemes: Schemes to compare (``"hqp"`` always first).
+        scheme_options: Keyword arguments of each listed closed-form scheme, by scheme name.
+        integrator: The configured :class:`~uvms_qp.sim.integrators.Integrator` (stateless).
+        current: Optional constant current.
+        trajectories: Named trajectories of the file (stateless).
+        events: Run-time parameter changes, sorted by time.
+        phases: Named time windows with their own metrics.
+        tracking: Name of the task whose target is the tool reference in the metrics, or None.
+        tracking_trajectory: The tool reference the closed-form schemes follow: the tracking
+            task's trajectory (in code: the only one of ``trajectories``), else None.
+        task_names: Names of the stack's tasks per level, highest priority first.
+        source: File the scenario came from, when any.
+        stack_source: Returns a new, unbound stack (the checked tables of a file, or copies of a
+            stack given in code); use :meth:`build_stack`.
     """
 
     name: str
     description: str
-    model: Any
+    model: Model
     q0: FloatArray
-    stack: Any
-    constraints: list[Any]
-    trajectories: dict[str, Trajectory]
-    solver: str
-    metric: FloatArray | None
     dt: float
     duration: float
-    events: list[Event]
-    current: ConstantCurrent | None
+    solver: str
+    metric: FloatArray | None
+    strict: bool
+    deadline: float | None
+    schemes: tuple[str, ...]
+    scheme_options: Mapping[str, Mapping[str, Any]]
     integrator: Integrator
-    schemes: list[str]
-    tracking: str | None = None
-    phases: list[Phase] = field(default_factory=list)
-    source: Path | None = None
-    data: dict[str, Any] = field(default_factory=dict, repr=False)
-    strict: bool = False
-    deadline: float | None = None
+    current: ConstantCurrent | None
+    trajectories: Mapping[str, Trajectory]
+    events: tuple[Event, ...]
+    phases: tuple[Phase, ...]
+    tracking: str | None
+    tracking_trajectory: Trajectory | None
+    task_names: tuple[tuple[str, ...], ...]
+    source: Path | None
+    stack_source: Callable[[], Stack] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "q0", _read_only(self.q0))
+        if self.metric is not None:
+            object.__setattr__(self, "metric", _read_only(self.metric))
+        object.__setattr__(self, "schemes", tuple(self.schemes))
+        object.__setattr__(self, "scheme_options", MappingProxyType(
+            {k: MappingProxyType(dict(v)) for k, v in self.scheme_options.items()}))
+        object.__setattr__(self, "trajectories", MappingProxyType(dict(self.trajectories)))
+        object.__setattr__(self, "events", tuple(sorted(self.events, key=lambda e: e.time)))
+        object.__setattr__(self, "phases", tuple(self.phases))
 
     @property
     def steps(self) -> int:
         """Number of control steps, ``round(duration / dt)``."""
-        return round(self.duration / self.dt)
+        return step_count(self.duration, self.dt)
 
-    def tasks(self) -> Iterator[Any]:
-        """Iterate over every task of the stack, highest priority first."""
-        for level in self.stack.levels:
-            yield from level.tasks
+    def build_stack(self) -> Stack:
+        """A new stack of this scenario (new task and constraint objects), bound to the model."""
+        return self.stack_source().bind(self.model)
 
-    def task(self, name: str) -> Any:
-        """Return the task called ``name``.
-
-        Raises:
-            UnknownNameError: no such task (the known names are listed).
-        """
-        for task in self.tasks():
-            if task.name == name:
-                return task
-        raise UnknownNameError("task", name, [t.name for t in self.tasks()])
-
-    def make_controller(self, solver: str | None = None) -> Any:
-        """Build a :class:`~uvms_qp.controller.Controller` for this scenario's stack.
+    def make_controller(self, solver: str | None = None, *, stack: Stack | None = None
+                        ) -> Controller:
+        """A :class:`~uvms_qp.controller.Controller` with this scenario's settings.
 
         The controller gets the scenario's ``dt``, ``metric``, ``strict`` and ``deadline``.
 
         Args:
             solver: Override of the scenario's solver.
+            stack: The stack to control (default: a new one, :meth:`build_stack`). Pass the
+                stack whose tasks the run's events update.
         """
-        from ..controller import Controller
-
         return Controller(
-            self.model, self.stack, solver=solver or self.solver, dt=self.dt, metric=self.metric,
-            strict=self.strict, deadline=self.deadline,
+            self.model, self.build_stack() if stack is None else stack,
+            solver=solver or self.solver, dt=self.dt, metric=self.metric, strict=self.strict,
+            deadline=self.deadline,
         )
+
+    def with_duration(self, duration: Any, path: str = "duration") -> Scenario:
+        """This scenario with another simulated time [s] (same step cap).
+
+        Raises:
+            ConfigError: at ``path`` (see :func:`step_count`).
+        """
+        step_count(duration, self.dt, path)
+        return dataclasses.replace(self, duration=float(duration))
 
     @classmethod
     def build(
         cls,
-        model: Any,
-        stack: Any,
+        model: Model,
+        stack: Stack | Callable[[], Stack],
         q0: Any,
         *,
         dt: float,
         duration: float,
         solver: str = "daqp",
         metric: Any = None,
-        events: list[Event] | None = None,
+        events: Sequence[Event] | None = None,
         current: ConstantCurrent | None = None,
         integrator: Integrator | None = None,
-        trajectories: dict[str, Trajectory] | None = None,
-        phases: list[Phase] | None = None,
+        trajectories: Mapping[str, Trajectory] | None = None,
+        phases: Sequence[Phase] | None = None,
         tracking: str | None = None,
         name: str = "custom",
         description: str = "",
         strict: bool = False,
         deadline: float | None = None,
+        schemes: Sequence[str] = ("hqp",),
+        scheme_options: Mapping[str, Mapping[str, Any]] | None = None,
     ) -> Scenario:
-        """Assemble a scenario in code (no file): the stack is bound to ``model`` here.
+        """Assemble a scenario in code (no file), validated as a file would be.
 
         Args:
             model: The model.
-            stack: A :class:`~uvms_qp.stack.Stack`.
+            stack: A :class:`~uvms_qp.stack.Stack` (copied now; each run gets its own copy) or a
+                function returning a new one.
             q0: Initial configuration (nq,) (checked by ``model.check_configuration``).
             dt: Control period [s].
             duration: Simulated time [s].
             solver: Solver name.
             metric: Diagonal metric W (nv,) or None.
-            events: Run-time parameter changes.
+            events: Run-time parameter changes (each applied once to a check stack here).
             current: Optional constant current.
             integrator: Default: explicit Euler, passive attitude held, with ``current``.
             trajectories: Named trajectories (informative; tasks hold their own).
@@ -210,56 +288,81 @@ class Scenario:
             description: Free text.
             strict: Raise instead of degrading when no back-end solves a step.
             deadline: Wall-time budget of one controller step [s], or None.
+            schemes: Schemes ``compare`` runs (``"hqp"`` is the stack).
+            scheme_options: Keyword arguments of listed closed-form schemes, by scheme name.
 
         Raises:
-            InputError: invalid dt/duration/q0/deadline, or any error of the stack or controller.
+            InputError: invalid dt/duration/q0/deadline, an event naming an unknown task
+                (:class:`~uvms_qp.errors.UnknownNameError`) or carrying an update its task
+                rejects, or any error of the stack, schemes or controller.
         """
-        from .._validation import as_scalar
-
-        dt = as_scalar(dt, "dt", positive=True)
+        dt = _check_dt(as_scalar(dt, "dt", positive=True), "dt")
         duration = as_scalar(duration, "duration", positive=True)
-        q0 = np.asarray(model.check_configuration(q0), dtype=np.float64)
-        stack.bind(model)
+        step_count(duration, dt)
+        q0 = model.check_configuration(q0)
+        if isinstance(stack, Stack):
+            source: Callable[[], Stack] = _StackCopies(stack, model)
+        elif callable(stack):
+            source = stack
+        else:
+            raise InputError(f"stack: expected a Stack or a function returning one, got "
+                             f"{type(stack).__name__}")
+        check = source()
+        if not isinstance(check, Stack):
+            raise InputError(f"stack: the function returned {type(check).__name__}, not a Stack")
+        check.bind(model)
+        known = [task.name for task in check.tasks]
+        given = list(events or [])
+        for i, event in enumerate(given):
+            if event.task not in known:
+                raise UnknownNameError("task", event.task, known)
+            if not event.path:
+                given[i] = dataclasses.replace(event, path=f"events[{i}].update")
+        ordered = sorted(given, key=lambda e: e.time)
+        names = _check_scheme_names(list(schemes), "schemes")
+        options = {
+            key: _scheme_keywords(key, Table(dict(value), join("scheme_options", key)), names)
+            for key, value in (scheme_options or {}).items()
+        }
         scenario = cls(
             name=name,
             description=description,
             model=model,
             q0=q0,
-            stack=stack,
-            constraints=list(stack.constraints),
-            trajectories=dict(trajectories or {}),
-            solver=solver,
-            metric=None if metric is None else np.asarray(metric, dtype=np.float64),
             dt=dt,
             duration=duration,
-            events=sorted(events or [], key=lambda e: e.time),
-            current=current,
-            integrator=integrator or Integrator(model, current=current),
-            schemes=["hqp"],
-            tracking=tracking,
-            phases=list(phases or []),
+            solver=solver,
+            metric=None if metric is None else as_vector(metric, "metric", model.nv,
+                                                         positive=True),
             strict=bool(strict),
             deadline=None if deadline is None else as_scalar(deadline, "deadline", positive=True),
+            schemes=names,
+            scheme_options=options,
+            integrator=integrator or Integrator(model, current=current),
+            current=current,
+            trajectories=dict(trajectories or {}),
+            events=tuple(ordered),
+            phases=tuple(phases or ()),
+            tracking=tracking if tracking is not None else _default_tracking(check),
+            tracking_trajectory=_only(trajectories or {}),
+            task_names=tuple(level.names for level in check.levels),
+            source=None,
+            stack_source=source,
         )
-        if scenario.tracking is None:
-            for task in scenario.tasks():
-                if callable(getattr(task, "target", None)) and hasattr(task, "frame"):
-                    scenario.tracking = task.name
-                    break
-        for event in scenario.events:
-            scenario.task(event.task)  # raises on an unknown task name
-        scenario.make_controller()  # validates solver, metric and stack now
+        scenario._check_objects(check)
+        scenario.make_controller(stack=check)
         return scenario
 
-    def rebuild(self) -> Scenario:
-        """Return a fresh scenario from the same data (new tasks, no event applied).
+    def _check_objects(self, stack: Stack) -> None:
+        """Build each closed-form scheme once, then apply the events to ``stack``.
 
-        Raises:
-            InputError: the scenario was built in code (no file data to rebuild from).
+        ``stack`` is the bound stack the scenario is checked on; the schemes read it before the
+        events change it (the payload force of a paper scheme is the task's initial one).
         """
-        if not self.data:
-            raise InputError(f"scenario {self.name!r} was built in code; it cannot be rebuilt")
-        return scenario_from_dict(self.data, source=self.source, name=self.name)
+        for i, name in enumerate(self.schemes):
+            if name != "hqp":
+                build_scheme(name, self, join("schemes", i), stack=stack)
+        apply_events(self.events, stack)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -314,51 +417,52 @@ def load_scenario(source: str | Path) -> Scenario:
 
 
 # ----------------------------------------------------------------------------------------------
-# Building
+# Reading the top-level table
 
 
-def _registries() -> tuple[Mapping[str, type], Mapping[str, type]]:
-    from ..constraints import CONSTRAINT_TYPES
-    from ..tasks import TASK_TYPES
-
-    return TASK_TYPES, CONSTRAINT_TYPES
-
-
-def _lookup_type(table: Table, registry: Mapping[str, type], kind: str) -> type:
-    type_name = str(table.take_str("type", required=True))
-    if type_name not in registry:
-        known = ", ".join(sorted(registry))
-        raise ConfigError(
-            f"unknown {kind} type {type_name!r}; known {kind} types: {known}", table.at("type")
-        )
-    return registry[type_name]
+def _check_dt(dt: float, path: str) -> float:
+    if not MIN_DT <= dt <= MAX_DT:
+        raise ConfigError(f"expected a control period in [{MIN_DT:g}, {MAX_DT:g}] s, got {dt:g}",
+                          path)
+    return dt
 
 
-def _load_model(table: Table) -> Any:
-    from ..model import bundled_models, load_model
-
-    name = str(table.take_str("model", required=True))
+def _read_model(top: Table, base: Path) -> Model:
+    value = top.raw("model", required=True)
+    if isinstance(value, dict):
+        return model_from_table(Table(value, top.at("model"), MODEL_KEYS), base)
+    name = str(top.take_str("model", required=True))
     try:
         return load_model(name)
     except UnknownNameError as exc:
+        others = [n for n in model_names() if n not in bundled_models()]
+        extra = f"; other known models: {', '.join(others)}" if others else ""
         raise ConfigError(
-            f"unknown model {name!r}; bundled models: {', '.join(bundled_models())}",
-            table.at("model"),
+            f"unknown model {name!r}; bundled models: {', '.join(bundled_models())}{extra}; "
+            "a [model] table builds one from a URDF file or a DH table",
+            top.at("model"),
         ) from exc
     except UvmsQpError as exc:
-        raise ConfigError(str(exc), table.at("model")) from exc
+        raise ConfigError(str(exc), top.at("model")) from exc
 
 
-def _initial_configuration(table: Table | None, model: Any) -> FloatArray:
+def _initial_configuration(table: Table | None, model: Model) -> FloatArray:
     eta0, joints0 = model.split(model.neutral())
     eta = np.array(eta0, dtype=np.float64)
     joints = np.array(joints0, dtype=np.float64)
+    path = "initial"
     if table is not None:
+        path = table.path
         eta_list = table.take_numbers("eta", size=int(model.eta_size))
         joint_list = table.take_numbers("joints", size=int(model.n_joints))
         table.finish()
         if eta_list is not None:
             eta = np.array(eta_list)
+            path = table.at("eta")
+            for i, value in enumerate(eta):
+                if abs(value) > MAX_POSE:
+                    raise ConfigError(f"expected a magnitude <= {MAX_POSE:g} [m or rad], "
+                                      f"got {value:g}", join(path, i))
         if joint_list is not None:
             joints = np.array(joint_list)
             lower = np.asarray(model.joint_lower)
@@ -370,14 +474,13 @@ def _initial_configuration(table: Table | None, model: Any) -> FloatArray:
                         f"{model.joint_names[i]!r} [{lower[i]:g}, {upper[i]:g}]",
                         join(table.at("joints"), i),
                     )
-    path = table.path if table is not None else "initial"
     try:
-        return np.asarray(model.configuration(eta, joints), dtype=np.float64)
+        return model.check_configuration(model.configuration(eta, joints))
     except UvmsQpError as exc:
         raise ConfigError(str(exc), path) from exc
 
 
-def _build_current(table: Table | None) -> ConstantCurrent | None:
+def _read_current(table: Table | None) -> ConstantCurrent | None:
     if table is None:
         return None
     direction = table.take_number("direction", required=True)
@@ -387,199 +490,7 @@ def _build_current(table: Table | None) -> ConstantCurrent | None:
     return ConstantCurrent(direction, speed, drift)  # type: ignore[arg-type]
 
 
-def _build_trajectory(table: Table) -> Trajectory:
-    cls = _lookup_type(table, TRAJECTORY_TYPES, "trajectory")
-    return construct(cls, table, kind="trajectory")  # type: ignore[no-any-return]
-
-
-class _TaskResolver:
-    """Resolve scenario references: ``trajectory = "name"`` and ``heading = "current"``."""
-
-    def __init__(
-        self, trajectories: dict[str, Trajectory], current: ConstantCurrent | None
-    ) -> None:
-        self.trajectories = trajectories
-        self.current = current
-
-    def __call__(self, key: str, hint: Any, value: Any, path: str) -> Any:
-        if key == "trajectory":
-            if isinstance(value, str):
-                if value not in self.trajectories:
-                    known = ", ".join(sorted(self.trajectories)) or "(none defined)"
-                    raise ConfigError(
-                        f"unknown trajectory {value!r}; known trajectories: {known}", path
-                    )
-                return self.trajectories[value]
-            if isinstance(value, dict):
-                return _build_trajectory(Table(value, path))
-            raise ConfigError("expected a trajectory name or an inline trajectory table", path)
-        if key == "heading" and isinstance(value, str):
-            if value != "current":
-                raise ConfigError(
-                    f"expected a number [rad] or the string 'current' (the direction of the "
-                    f"[current] table), got {value!r}",
-                    path,
-                )
-            if self.current is None:
-                raise ConfigError("'current' needs a [current] table in the scenario", path)
-            return self.current.heading
-        return NOT_HANDLED
-
-
-def _bind(obj: Any, model: Any, table: Table, kwargs_source: Mapping[str, Any]) -> None:
-    bind = getattr(obj, "bind", None)
-    if bind is None:
-        return
-    try:
-        bind(model)
-    except (UvmsQpError, ValueError) as exc:
-        parameters = list(keyword_parameters(type(obj)))
-        raise config_error_from(exc, table.path, parameters, kwargs_source) from exc
-
-
-def _dry_run_rows(
-    cls: type, task_table: Table, resolver: _TaskResolver, model: Any, state: Any
-) -> None:
-    """Evaluate a scratch copy of a task once at the initial state.
-
-    Catches what only shows when a task is evaluated (e.g. a heading never set) without touching
-    the run-time state of the real task.
-    """
-    scratch = construct(cls, Table(dict(task_table.data), task_table.path), resolver=resolver,
-                        kind="task")
-    raw = dict(task_table.data)
-    _bind(scratch, model, task_table, raw)
-    try:
-        scratch.rows(state, 0.0)
-    except (UvmsQpError, ValueError) as exc:
-        raise config_error_from(exc, task_table.path, list(keyword_parameters(cls)), raw) from exc
-
-
-def _build_levels(
-    top: Table,
-    model: Any,
-    task_types: Mapping[str, type],
-    resolver: _TaskResolver,
-    state: Any = None,
-) -> tuple[list[list[Any]], dict[str, tuple[Any, Table]]]:
-    levels: list[list[Any]] = []
-    by_name: dict[str, tuple[Any, Table]] = {}
-    level_tables = top.take_tables("levels", required=True, keys=("tasks",))
-    if not level_tables:
-        raise ConfigError("expected at least one level", top.at("levels"))
-    for level_table in level_tables:
-        task_tables = level_table.take_tables("tasks", required=True)
-        level_table.finish()
-        if not task_tables:
-            raise ConfigError("expected at least one task in a level", level_table.at("tasks"))
-        tasks = []
-        for task_table in task_tables:
-            cls = _lookup_type(task_table, task_types, "task")
-            raw = dict(task_table.data)
-            task = construct(cls, task_table, resolver=resolver, kind="task")
-            if task.name in by_name:
-                raise ConfigError(
-                    f"duplicate task name {task.name!r} (also at {by_name[task.name][1].path}); "
-                    "give each task a unique 'name'",
-                    task_table.at("name"),
-                )
-            _bind(task, model, task_table, raw)
-            if getattr(task, "has_target", True) is False:
-                raise ConfigError(
-                    f"task {task.name!r} has no target: give it a 'trajectory' or a fixed target "
-                    "(e.g. 'position')",
-                    task_table.path,
-                )
-            if state is not None and callable(getattr(task, "rows", None)):
-                _dry_run_rows(cls, task_table, resolver, model, state)
-            by_name[task.name] = (task, task_table)
-            tasks.append(task)
-        levels.append(tasks)
-    return levels, by_name
-
-
-def _build_constraints(
-    top: Table, model: Any, constraint_types: Mapping[str, type]
-) -> list[Any]:
-    constraints = []
-    for table in top.take_tables("constraints"):
-        cls = _lookup_type(table, constraint_types, "constraint")
-        raw = dict(table.data)
-        constraint = construct(cls, table, kind="constraint")
-        _bind(constraint, model, table, raw)
-        constraints.append(constraint)
-    return constraints
-
-
-def _build_events(
-    top: Table,
-    duration: float,
-    tasks: dict[str, tuple[Any, Table]],
-    resolver: _TaskResolver,
-    model: Any,
-) -> list[Event]:
-    events = []
-    for table in top.take_tables("events", keys=("time", "task", "update")):
-        time = float(table.take_number("time", required=True, minimum=0.0, maximum=duration) or 0)
-        name = str(table.take_str("task", required=True))
-        update_table = table.take_table("update", required=True) or Table({}, "")
-        table.finish()
-        if name not in tasks:
-            raise ConfigError(
-                f"unknown task {name!r}; known tasks: {', '.join(tasks)}", table.at("task")
-            )
-        task, task_table = tasks[name]
-        cls = type(task)
-        updatable = getattr(task, "updatable", None)
-        allowed = (
-            tuple(updatable()) if callable(updatable) else tuple(keyword_parameters(cls))
-        )
-        hints = parameter_hints(cls)
-        update: dict[str, Any] = {}
-        for key, value in update_table.data.items():
-            path = update_table.at(key)
-            if key not in allowed or key == "name":
-                known = ", ".join(p for p in allowed if p != "name")
-                raise ConfigError(
-                    f"unknown parameter {key!r} of task {name!r}; known parameters: {known}", path
-                )
-            converted = resolver(key, hints.get(key), value, path)
-            if converted is NOT_HANDLED:
-                converted = convert(value, hints.get(key, Any), path)
-            update[key] = converted
-        _dry_run_update(cls, task_table, resolver, model, update, update_table.path)
-        events.append(Event(float(time), name, update, table.path))
-    events.sort(key=lambda e: e.time)
-    return events
-
-
-def _dry_run_update(
-    cls: type,
-    task_table: Table,
-    resolver: _TaskResolver,
-    model: Any,
-    update: dict[str, Any],
-    path: str,
-) -> None:
-    """Validate an event's update on a scratch copy of the task (its constructor's table).
-
-    The copy is bound to ``model`` first, so checks that need the model (a 2-coordinate
-    ``position`` on a spatial model, a trajectory's dimension) fail here, at the event's path,
-    rather than when the event fires.
-    """
-    scratch = construct(cls, Table(dict(task_table.data), task_table.path), resolver=resolver,
-                        kind="task")
-    _bind(scratch, model, task_table, dict(task_table.data))
-    method = getattr(scratch, "update", None)
-    if method is None:
-        raise ConfigError(f"task type {cls.__name__} has no run-time update", path)
-    try:
-        method(**update)
-    except (UvmsQpError, ValueError, TypeError) as exc:
-        raise config_error_from(exc, path, list(update), update) from exc
-
-
-def _build_phases(top: Table, duration: float) -> list[Phase]:
+def _read_phases(top: Table, duration: float) -> list[Phase]:
     phases: list[Phase] = []
     for table in top.take_tables("phases", keys=("name", "start", "end")):
         name = str(table.take_str("name", required=True))
@@ -594,31 +505,51 @@ def _build_phases(top: Table, duration: float) -> list[Phase]:
     return phases
 
 
-def _check_schemes(top: Table) -> list[str]:
-    schemes = top.take_strs("schemes", ["hqp"]) or ["hqp"]
-    try:
-        from ..schemes import SCHEME_TYPES
-    except ImportError:  # closed-form schemes not installed: names are checked when built
-        known = None
-    else:
-        known = ["hqp", *SCHEME_TYPES]
+def _check_scheme_names(schemes: list[str], path: str) -> tuple[str, ...]:
+    known = ["hqp", *SCHEME_TYPES]
     for i, name in enumerate(schemes):
-        if known is not None and name not in known:
+        if name not in known:
             raise ConfigError(
-                f"unknown scheme {name!r}; known schemes: {', '.join(known)}",
-                join(top.at("schemes"), i),
+                f"unknown scheme {name!r}; known schemes: {', '.join(known)}"
+                f"{did_you_mean(str(name), known)}",
+                join(path, i),
             )
         if name in schemes[:i]:
-            raise ConfigError(f"scheme {name!r} listed twice", join(top.at("schemes"), i))
-    return schemes if "hqp" in schemes else ["hqp", *schemes]
+            raise ConfigError(f"scheme {name!r} listed twice", join(path, i))
+    return tuple(schemes if "hqp" in schemes else ["hqp", *schemes])
+
+
+def _scheme_keywords(name: str, table: Table, schemes: Sequence[str]) -> dict[str, Any]:
+    """The checked keyword arguments of ``[scheme_options.<name>]``."""
+    listed = [s for s in schemes if s != "hqp"]
+    if name == "hqp":
+        raise ConfigError("the hqp stack takes no scheme options; its settings are the "
+                          "top-level keys (solver, metric, strict, deadline)", table.path)
+    if name not in listed:
+        raise ConfigError(
+            f"options for scheme {name!r}, which 'schemes' does not list; listed schemes: "
+            f"{', '.join(listed) or '(none)'}{did_you_mean(name, listed)}",
+            table.path,
+        )
+    cls = SCHEME_TYPES[name]
+    kwargs = keyword_arguments(cls, table, skip=(), exclude=("name",),
+                               label=f"scheme {name!r}")
+    instantiate(cls, kwargs, table.path)  # the constructor's own checks, at this path
+    return kwargs
+
+
+def _read_scheme_options(top: Table, schemes: Sequence[str]) -> dict[str, dict[str, Any]]:
+    table = top.take_table("scheme_options")
+    if table is None:
+        return {}
+    options = {}
+    for key in list(table.data):
+        options[key] = _scheme_keywords(key, Table(table.raw(key), table.at(key)), schemes)
+    return options
 
 
 def _check_solver(table: Table) -> str:
     solver = str(table.take_str("solver", "daqp"))
-    try:
-        from ..hqp import available_solvers
-    except ImportError:  # solver package not importable: the controller will report it
-        return solver
     known = available_solvers()
     if solver not in known:
         raise ConfigError(
@@ -628,18 +559,35 @@ def _check_solver(table: Table) -> str:
     return solver
 
 
-def _tracking_task(top: Table, tasks: dict[str, tuple[Any, Table]]) -> str | None:
-    name = top.take_str("tracking")
-    if name is not None:
-        if name not in tasks:
-            raise ConfigError(
-                f"unknown task {name!r}; known tasks: {', '.join(tasks)}", top.at("tracking")
-            )
-        return name
-    for task_name, (task, _table) in tasks.items():
+def _default_tracking(stack: Stack) -> str | None:
+    """The first task with a ``target`` method and a ``frame``, or None."""
+    for task in stack.tasks:
         if callable(getattr(task, "target", None)) and hasattr(task, "frame"):
-            return task_name
+            return task.name
     return None
+
+
+def _only(trajectories: Mapping[str, Trajectory]) -> Trajectory | None:
+    return next(iter(trajectories.values())) if len(trajectories) == 1 else None
+
+
+def _tracking(top: Table, stack: Stack, tables: StackTables
+              ) -> tuple[str | None, Trajectory | None]:
+    """The tracking task (``tracking`` key or the default) and its trajectory."""
+    names = [task.name for task in stack.tasks]
+    name = top.take_str("tracking")
+    if name is not None and name not in names:
+        raise ConfigError(
+            f"unknown task {name!r}; known tasks: {', '.join(names)}", top.at("tracking")
+        )
+    if name is None:
+        name = _default_tracking(stack)
+    for level, items in zip(stack.levels, tables.levels, strict=True):
+        for task, item in zip(level.tasks, items, strict=True):
+            reference = item.kwargs.get("trajectory")
+            if task.name == name and isinstance(reference, Trajectory):
+                return name, reference
+    return name, None
 
 
 def scenario_from_dict(
@@ -650,11 +598,15 @@ def scenario_from_dict(
     task_types: Mapping[str, type] | None = None,
     constraint_types: Mapping[str, type] | None = None,
 ) -> Scenario:
-    """Build a :class:`Scenario` from parsed TOML data (see ``docs/scenarios.md``).
+    """Read and validate parsed TOML data into a :class:`Scenario` (see ``docs/scenarios.md``).
+
+    The tables are checked once: each task and constraint is built and bound once, evaluated at
+    the initial state, the events are applied to it in time order, and each closed-form scheme
+    and the controller are built once. The scenario keeps the checked tables, not these objects.
 
     Args:
         data: Parsed TOML (top-level table).
-        source: File the data came from (kept for messages and :meth:`Scenario.rebuild`).
+        source: File the data came from (a relative URDF path is relative to its folder).
         name: Default scenario name (the file stem) when the data has no ``name``.
         task_types: Task registry; default ``uvms_qp.tasks.TASK_TYPES``.
         constraint_types: Constraint registry; default ``uvms_qp.constraints.CONSTRAINT_TYPES``.
@@ -662,22 +614,14 @@ def scenario_from_dict(
     Raises:
         ConfigError: any invalid field, with its path.
     """
-    if task_types is None or constraint_types is None:
-        default_tasks, default_constraints = _registries()
-        task_types = task_types or default_tasks
-        constraint_types = constraint_types or default_constraints
     top = Table(data, "", _TOP_KEYS)
     scenario_name = top.take_str("name", name) or name
     description = top.take_str("description", "") or ""
-    model = _load_model(top)
-    dt = float(top.take_number("dt", required=True, positive=True, maximum=10.0) or 0.0)
+    model = _read_model(top, source.parent if source is not None else Path.cwd())
+    dt = float(top.take_number("dt", required=True, positive=True) or 0.0)
+    dt = _check_dt(dt, top.at("dt"))
     duration = float(top.take_number("duration", required=True, positive=True) or 0.0)
-    if duration / dt > MAX_STEPS:
-        raise ConfigError(
-            f"{duration:g} s at dt = {dt:g} s is {math.ceil(duration / dt)} steps; "
-            f"at most {MAX_STEPS} are allowed",
-            "duration",
-        )
+    step_count(duration, dt, top.at("duration"))
     solver = _check_solver(top)
     strict = top.take_bool("strict", False)
     deadline = top.take_number("deadline", None, positive=True)
@@ -688,10 +632,11 @@ def scenario_from_dict(
         if np.any(metric <= 0.0):
             i = int(np.flatnonzero(metric <= 0.0)[0])
             raise ConfigError(f"expected a positive weight, got {metric[i]:g}", f"metric[{i}]")
-    schemes = _check_schemes(top)
+    schemes = _check_scheme_names(top.take_strs("schemes", ["hqp"]) or ["hqp"], top.at("schemes"))
+    scheme_options = _read_scheme_options(top, schemes)
     method = top.take_str("integrator", "euler", choices=("euler", "rk4"))
     q0 = _initial_configuration(top.take_table("initial"), model)
-    current = _build_current(top.take_table("current", keys=("direction", "speed", "drift")))
+    current = _read_current(top.take_table("current", keys=("direction", "speed", "drift")))
     passive_table = top.take_table("passive")
     passive, tau = "hold", 2.0
     if passive_table is not None:
@@ -700,53 +645,41 @@ def scenario_from_dict(
         passive_table.finish()
     integrator = Integrator(model, method, passive, tau, current)  # type: ignore[arg-type]
 
-    trajectories: dict[str, Trajectory] = {}
-    trajectory_tables = top.take_table("trajectories")
-    if trajectory_tables is not None:
-        for key in list(trajectory_tables.data):
-            trajectory_tables.raw(key)
-            trajectories[key] = _build_trajectory(
-                Table(trajectory_tables.data[key], trajectory_tables.at(key))
-            )
-    resolver = _TaskResolver(trajectories, current)
-    constraints = _build_constraints(top, model, constraint_types)
-    levels, tasks = _build_levels(top, model, task_types, resolver, model.state(q0))
-    events = _build_events(top, duration, tasks, resolver, model)
-    tracking = _tracking_task(top, tasks)
-    phases = _build_phases(top, duration)
+    trajectories = read_trajectories(top.take_table("trajectories"))
+    resolver = TaskResolver(trajectories, current)
+    tables, stack = read_stack(top, model, resolver, task_types or TASK_TYPES,
+                               constraint_types or CONSTRAINT_TYPES, model.state(q0))
+    events = read_events(top, duration, stack, resolver)
+    tracking, reference = _tracking(top, stack, tables)
+    phases = _read_phases(top, duration)
     top.finish()
-
-    from ..stack import Level, Stack
-
-    try:
-        stack = Stack(levels=[Level(*tasks_) for tasks_ in levels], constraints=constraints)
-    except (UvmsQpError, ValueError) as exc:
-        raise ConfigError(str(exc), "levels") from exc
     scenario = Scenario(
         name=scenario_name,
         description=description,
         model=model,
         q0=q0,
-        stack=stack,
-        constraints=list(constraints),
-        trajectories=trajectories,
-        solver=solver,
-        metric=metric,
         dt=dt,
         duration=duration,
-        events=events,
-        current=current,
-        integrator=integrator,
-        schemes=schemes,
-        tracking=tracking,
-        phases=phases,
-        source=source,
-        data=data,
+        solver=solver,
+        metric=metric,
         strict=strict,
         deadline=deadline,
+        schemes=schemes,
+        scheme_options=scheme_options,
+        integrator=integrator,
+        current=current,
+        trajectories=trajectories,
+        events=events,
+        phases=tuple(phases),
+        tracking=tracking,
+        tracking_trajectory=reference,
+        task_names=tuple(level.names for level in stack.levels),
+        source=source,
+        stack_source=tables,
     )
+    scenario._check_objects(stack)
     try:
-        scenario.make_controller()
+        scenario.make_controller(stack=stack)
     except (UvmsQpError, ValueError) as exc:
         raise ConfigError(str(exc), "solver") from exc
     return scenario

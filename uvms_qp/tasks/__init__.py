@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from .current_alignment import CurrentAlignmentTask
 from .end_effector import EndEffectorTask
-from .joint_limit import JointLimitTask, joint_limit_gradient_bound, joint_limit_index
-from .manipulability import ManipulabilityTask, manipulability_and_gradient, shaping_function
+from .joint_limit import JointLimitTask
+from .manipulability import ManipulabilityTask, manipulability_and_gradient
 from .payload_moment import PayloadMomentTask
 from .posture import PostureTask
 from .station_keeping import StationKeepingTask
@@ -45,9 +45,6 @@ __all__ = [
     "Task",
     "VehicleAttitudeTask",
     "VehicleMotionTask",
-    "joint_limit_gradient_bound",
-    "joint_limit_index",
     "manipulability_and_gradient",
     "motion_distribution_weights",
-    "shaping_function",
 ]

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from operator import itemgetter
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -12,14 +11,15 @@ import pinocchio as pin
 
 from .._validation import FloatArray, as_matrix, as_vector
 from ..errors import InputError, ShapeError
+from ..model.transforms import rpy_to_matrix
 
 TWIST_AXES = ("x", "y", "z", "rx", "ry", "rz")
 """Row names of a twist ``[v; omega]``: linear x, y, z [m/s] then angular x, y, z [rad/s]."""
 
 
-def wrap_angle(angle: float | FloatArray) -> Any:
-    """Wrap an angle [rad] (or an array of angles) to ``[-pi, pi)``."""
-    return (np.asarray(angle) + math.pi) % (2.0 * math.pi) - math.pi
+def wrap_angle(angle: float) -> float:
+    """Wrap an angle [rad] to ``[-pi, pi)``."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def parse_axes(axes: Any, allowed: Sequence[str], label: str) -> list[str]:
@@ -63,7 +63,7 @@ def as_rotation(value: Any, label: str) -> FloatArray:
         raise ShapeError(f"{label}: expected 3 angles or a 3x3 matrix") from exc
     if ndim <= 1:
         rpy = as_vector(value, label, 3)
-        return np.asarray(pin.rpy.rpyToMatrix(rpy), dtype=np.float64)
+        return rpy_to_matrix(rpy)
     R = as_matrix(value, label, 3, 3)
     err = float(np.abs(R.T @ R - np.eye(3)).max())
     if err > 1e-6:
@@ -71,6 +71,37 @@ def as_rotation(value: Any, label: str) -> FloatArray:
     if np.linalg.det(R) < 0.0:
         raise InputError(f"{label}: not a rotation matrix (det < 0, a reflection)")
     return R
+
+
+def as_pose(value: Any, label: str) -> FloatArray:
+    """Validate a pose: a ``pinocchio.SE3``, a 4x4 homogeneous matrix or ``{"xyz", "rpy"}``.
+
+    Returns:
+        A new 4x4 array ``[[R, p], [0, 1]]`` [m].
+
+    Raises:
+        ShapeError: not 4x4.
+        InputError: a bottom row other than ``[0, 0, 0, 1]``, a 3x3 block that is not a
+            rotation (tolerance 1e-6), unknown mapping keys.
+        NonFiniteError: NaN or inf entries.
+    """
+    if isinstance(value, pin.SE3):
+        T = np.array(value.homogeneous)
+    elif isinstance(value, Mapping):
+        unknown = sorted(set(value) - {"xyz", "rpy"})
+        if unknown:
+            raise InputError(f"{label}: unknown keys {unknown}; expected 'xyz' and/or 'rpy'")
+        T = np.eye(4)
+        T[:3, :3] = as_rotation(value.get("rpy", (0.0, 0.0, 0.0)), f"{label}.rpy")
+        T[:3, 3] = as_vector(value.get("xyz", (0.0, 0.0, 0.0)), f"{label}.xyz", 3)
+        return T
+    else:
+        T = as_matrix(value, label, 4, 4).copy()
+    if T[3].tolist() != [0.0, 0.0, 0.0, 1.0]:
+        raise InputError(f"{label}: the bottom row of a homogeneous transform must be "
+                         f"[0, 0, 0, 1], got {T[3].tolist()}")
+    as_rotation(T[:3, :3], label)
+    return T
 
 
 def as_point(value: Any, label: str, vehicle_kind: str | None = None) -> FloatArray:
@@ -107,10 +138,6 @@ def check_planar_point(label: str, vehicle_kind: str | None) -> None:
                          "give 3 (x, y, z) (2 are allowed only on planar models)")
 
 
-
-
-
-
 def check_frame(model: Any, frame: Any, label: str) -> str:
     """Check that ``frame`` names a frame of ``model`` (raises UnknownFrameError otherwise)."""
     if not isinstance(frame, str):
@@ -119,19 +146,15 @@ def check_frame(model: Any, frame: Any, label: str) -> str:
     return frame
 
 
-def eta_axes(model: Any) -> tuple[str, ...]:
-    """Names of the vehicle pose coordinates of ``model`` (``eta``)."""
-    if model.vehicle_kind == "planar":
-        return ("x", "y", "psi")
-    if model.vehicle_kind == "spatial":
-        return ("x", "y", "z", "phi", "theta", "psi")
-    return ()
-
-
+def check_choice(value: Any, choices: Sequence[str], label: str) -> str:
+    """Return ``value`` if it is one of the strings ``choices``, else raise InputError."""
+    if not isinstance(value, str) or value not in choices:
+        raise InputError(f"{label}: expected one of {', '.join(map(repr, choices))}, "
+                         f"got {value!r}")
+    return value
 
 
 ANGLE_AXES = frozenset({"phi", "theta", "psi"})
-_TWO_PI = 2.0 * math.pi
 
 
 def pose_units(axes: Sequence[str]) -> tuple[str, str]:
@@ -147,62 +170,4 @@ def pose_units(axes: Sequence[str]) -> tuple[str, str]:
     return error, rate
 
 
-_LINEAR_RATES = frozenset({"u", "v", "w"})
 _POSITION_AXES = frozenset({"x", "y", "z"})
-
-
-class EtaRows:
-    """Writer of selected rows of the vehicle-pose Jacobian ``J_eta`` into a row block.
-
-    At bind: the entries of the rows that can be non-zero (a position coordinate moves with the
-    linear rates u, v, w only, an angle with the angular rates p, q, r only; joint columns are
-    zero), as flat positions in the ``(len(rows), nv)`` block and positions in the state's
-    :meth:`~uvms_qp.model.State.eta_jacobian_values`. Per tick :meth:`write` zeroes the block and
-    puts those plain floats (two array calls, no ``(eta_size, nv)`` matrix).
-
-    Args:
-        model: The bound model.
-        rows: Indices of the selected coordinates in ``eta``.
-    """
-
-    def __init__(self, model: Any, rows: Sequence[int]) -> None:
-        axes = eta_axes(model)
-        n_full = model.vehicle.nv  # row length of eta_jacobian_values (all vehicle rates)
-        columns = model._eta_columns or list(range(model.n_vehicle))
-        dst: list[int] = []
-        src: list[int] = []
-        for i, r in enumerate(rows):
-            for c, rate in enumerate(model.actuated):
-                if (axes[r] in _POSITION_AXES) == (rate in _LINEAR_RATES):
-                    dst.append(i * model.nv + c)
-                    src.append(r * n_full + columns[c])
-        self.dst = np.asarray(dst, dtype=np.intp)
-        # one C-level pick of the entries (a 1-tuple wrapper keeps a single entry a sequence)
-        self._pick: Callable[[Sequence[float]], Sequence[float]]
-        if len(src) > 1:
-            self._pick = itemgetter(*src)
-        elif src:
-            k = src[0]
-            self._pick = lambda values: (values[k],)
-        else:  # no actuated rate moves these coordinates: zero rows
-            self._pick = lambda values: ()
-
-    def write(self, state: Any, A: FloatArray) -> None:
-        """Write the rows at ``state`` into ``A`` (every entry)."""
-        A.fill(0.0)
-        A.put(self.dst, self._pick(state.eta_jacobian_values()))
-
-
-def vehicle_pose_jacobian(state: Any) -> FloatArray:
-    """``state.vehicle_pose_jacobian()`` (read-only, computed once per state by the state)."""
-    return state.vehicle_pose_jacobian()  # type: ignore[no-any-return]
-
-
-def wrap_angles_in_place(e: FloatArray, positions: Sequence[int]) -> None:
-    """Wrap the entries ``e[i]``, ``i`` in ``positions``, to ``[-pi, pi)`` in place.
-
-    The same operations as :func:`wrap_angle`, per entry in plain floats (cheaper than masks
-    for the one to three angles of a vehicle pose).
-    """
-    for i in positions:
-        e[i] = (e.item(i) + math.pi) % _TWO_PI - math.pi

@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from ._common import _TWO_PI, EtaRows, eta_axes, vehicle_pose_jacobian
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
+
+
+_TWO_PI = 2.0 * math.pi
 
 
 class CurrentAlignmentTask(ErrorTask):
@@ -61,50 +63,26 @@ class CurrentAlignmentTask(ErrorTask):
             self._apply_update("heading", heading)
         if direction is not None:
             self._apply_update("direction", direction)
-        self._row = 0
-        self._rows: EtaRows | None = None
+        self._row: slice = slice(0, 0)
 
     def _bind(self, model: Model) -> int:
-        axes = eta_axes(model)
-        if "psi" not in axes:
+        if "psi" not in model.eta_names:
             raise InputError(f"{self.name}: model {model.name!r} has no vehicle heading")
         if "r" not in model.actuated:
             raise InputError(f"{self.name}: model {model.name!r} does not actuate yaw rate r")
-        self._row = axes.index("psi")
-        self._rows = EtaRows(model, [self._row])
+        row = model.eta_names.index("psi")
+        self._row = slice(row, row + 1)
         return 1
 
-    def compute_error(self, state: State, t: float) -> FloatArray:
-        """``wrap(psi_c + offset - psi)`` [rad]."""
-        if self.heading is None:
-            self._missing_heading()
-        e = (self.heading + self.offset - float(state.eta[self._row]) + math.pi) % (2 * math.pi)
-        return np.array((e - math.pi,))
-
-    def _missing_heading(self) -> NoReturn:
-        raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
-                         "direction=, or call update(heading=...)")
-
-    def compute_jacobian(self, state: State, t: float) -> FloatArray:
-        """Yaw row of the vehicle-pose Jacobian (1, nv)."""
-        return vehicle_pose_jacobian(state)[self._row: self._row + 1]
-
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write ``J_psi zeta = K wrap(psi_c + offset - psi)``.
-
-        The operations of :meth:`compute_error` in plain floats; the row is written from the
-        state's plain-float ``J_eta`` entries.
-        """
-        if not self._fused:
-            super().fill(state, t, A, lower, upper)
-            return
+    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+        """``(J_psi, wrap(psi_c + offset - psi), None)``: the yaw row of ``J_eta`` (1, nv)."""
         heading = self.heading
         if heading is None:
-            self._missing_heading()
-        e = (heading + self.offset - state.eta_floats()[self._row] + math.pi) % _TWO_PI
-        self._rows.write(state, A)  # type: ignore[union-attr]
-        self._set_sides_floats([e - math.pi], lower, upper)
+            raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
+                             "direction=, or call update(heading=...)")
+        row = self._row
+        e = (heading + self.offset - state.eta.item(row.start) + math.pi) % _TWO_PI - math.pi
+        return state.vehicle_pose_jacobian()[row], np.array((e,)), None
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -3,93 +3,19 @@
 from __future__ import annotations
 
 import math
-from operator import sub
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
+from ..analytic.joint_limits import LIMIT_CLEARANCE, index_and_gradient, limit_table
 from ..errors import InputError
 from ..model.selection import check_joint_list, compact_index, joint_indices
+from ._common import check_choice
 from .task import Task
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
-
-
-#: Distance to a limit, as a fraction of the joint's range, below which the distance counts as
-#: exactly that much in the index and its gradient (see :func:`joint_limit_index`).
-LIMIT_CLEARANCE = 1e-2
-
-
-def joint_limit_index(q: FloatArray, lower: FloatArray, upper: FloatArray,
-                      strength: FloatArray,
-                      clearance: float = LIMIT_CLEARANCE) -> tuple[float, FloatArray]:
-    r"""Joint-limit index and its gradient, ``003_229789978cc4b235.txt, Eq. (15)-(16)``, saturated.
-
-    ``H(q) = sum_i (q_max,i - q_min,i)^2 / (C_i (q_max,i - q) (q - q_min,i))`` (dimensionless,
-    minimum ``4 / C_i`` per joint at mid-range, infinite at a limit) and
-    ``dH/dq_i = (q_max - q_min)^2 (2 q_i - q_max - q_min) / (C_i (q_max - q_i)^2 (q_i - q_min)^2)``
-    [1/rad].
-
-    The exact index blows up at a limit (about ``1e17`` for a joint at its limit with the
-    distances merely kept positive), which no QP back-end can digest. Here both distances
-    ``q_max - q_i`` and ``q_i - q_min`` are clipped from below at ``eps_i = clearance (q_max,i -
-    q_min,i)`` in both formulas: the values are exact for every joint farther than ``eps_i``
-    from its limits; closer, at or beyond a limit, the distance to that limit counts as
-    ``eps_i`` (the returned gradient is then Eq. (16) with clipped distances, a saturation, not
-    the derivative of the clipped ``H``). The gradient keeps the sign of
-    ``2 q_i - q_max - q_min`` (the direction of the exact Eq. (16), pointing away from the
-    middle of the range, also outside the limits) and is bounded by
-
-        |dH/dq_i| <= s_i / (C_i eps_i^2) = 1 / (C_i clearance^2 s_i),   s_i = q_max,i - q_min,i,
-
-    (``1e4 / (C_i s_i)`` [1/rad] with the default ``clearance = 1e-2``), and ``H`` by
-    ``1 / (C_i clearance (1 - clearance))`` per joint.
-
-    Args:
-        q: Joint angles [rad].
-        lower: ``q_min`` [rad] (finite).
-        upper: ``q_max`` [rad] (finite).
-        strength: ``C_i`` (positive).
-        clearance: ``eps_i / s_i``, in (0, 0.5).
-
-    Returns:
-        ``(H, grad H)``.
-    """
-    H, grad = _index_floats(np.asarray(q, dtype=np.float64).tolist(),
-                            _per_joint(lower, upper, strength, clearance))
-    return H, np.array(grad)
-
-
-def _per_joint(lower: FloatArray, upper: FloatArray, strength: FloatArray,
-               clearance: float) -> list[tuple[float, float, float, float, float]]:
-    """Per joint ``(q_min, q_max, C, span, eps)`` as plain floats for :func:`_index_floats`."""
-    span = upper - lower
-    return list(zip(lower.tolist(), upper.tolist(), strength.tolist(), span.tolist(),
-                    (clearance * span).tolist(), strict=True))
-
-
-def _index_floats(q: list[float], per_joint: list[tuple[float, float, float, float, float]]
-                  ) -> tuple[float, list[float]]:
-    """:func:`joint_limit_index` in plain floats, joint by joint (a handful of joints)."""
-    H = 0.0
-    grad = []
-    for x, (lo, hi, C, span, tiny) in zip(q, per_joint, strict=True):
-        a = max(hi - x, tiny)
-        b = max(x - lo, tiny)
-        H += span * span / (C * a * b)
-        grad.append(span * span * (2.0 * x - hi - lo) / (C * a * a * b * b))
-    return H, grad
-
-
-def joint_limit_gradient_bound(lower: FloatArray, upper: FloatArray, strength: FloatArray,
-                               clearance: float = LIMIT_CLEARANCE) -> FloatArray:
-    """Upper bound of ``|dH/dq_i|`` [1/rad] returned by :func:`joint_limit_index` at any ``q``.
-
-    ``1 / (C_i clearance^2 (q_max,i - q_min,i))`` (see :func:`joint_limit_index`).
-    """
-    return 1.0 / (strength * clearance * clearance * (upper - lower))
 
 
 class JointLimitTask(Task):
@@ -99,7 +25,8 @@ class JointLimitTask(Task):
 
     * ``"gradient"``: rows ``qdot_S = -lambda grad H`` (one per joint with finite limits,
       [rad/s]), the gradient-projection use of the index ``H`` of
-      ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see :func:`joint_limit_index`); with
+      ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see
+      :func:`~uvms_qp.analytic.joint_limit_index`); with
       ``normalize=True`` the gradient is divided by its norm (Eq. (11)). For joints at (or
       beyond) a limit, or closer to it than 1 % of their range, the distance to that limit
       counts as 1 % of the range, so the rows stay finite and bounded
@@ -144,9 +71,7 @@ class JointLimitTask(Task):
         name: str | None = None,
     ) -> None:
         super().__init__(name=name, weight=weight)
-        if mode not in ("gradient", "margin", "damping"):
-            raise InputError(f"{self.name}.mode: expected 'gradient', 'margin' or 'damping', got "
-                             f"{mode!r}")
+        check_choice(mode, ("gradient", "margin", "damping"), f"{self.name}.mode")
         if not isinstance(normalize, bool):
             raise InputError(f"{self.name}.normalize: expected true or false")
         self.mode = mode
@@ -162,14 +87,13 @@ class JointLimitTask(Task):
             self._strength_arg = as_scalar(strength, f"{self.name}.strength", positive=True)
         self._idx = np.zeros(0, dtype=int)
         self._jsel: Any = self._idx
-        self._lo = self._hi = self._C = self._lo_m = self._hi_m = np.zeros(0)
+        self._lo = self._hi = self._C = np.zeros(0)
         self._A = np.zeros((0, 0))
         self._lo_list: list[float] = []
         self._hi_list: list[float] = []
         self._lo_m_list: list[float] = []
         self._hi_m_list: list[float] = []
-        self._subset: list[int] | None = None  # regulated joints, None: all of them
-        self._per_joint: list[tuple[float, float, float, float, float]] = []
+        self._table: list[tuple[float, float, float, float, float]] = []
         self.value = float("nan")
 
     @property
@@ -200,22 +124,20 @@ class JointLimitTask(Task):
             raise InputError(f"{self.name}.margin: {self.margin} rad leaves no room inside the "
                              f"limits of joint {model.joint_names[idx[j]]!r}")
         self._idx, self._lo, self._hi, self._C = idx, lo, hi, C
-        self._jsel = compact_index(idx)
-        kept = idx.tolist()
-        self._subset = None if kept == list(range(model.n_joints)) else kept
+        self._jsel = None if idx.tolist() == list(range(model.n_joints)) else compact_index(idx)
         self.error_unit = "rad" if self.mode == "margin" else "1"  # distance or index H
-        self._per_joint = _per_joint(lo, hi, C, LIMIT_CLEARANCE)
+        self._table = limit_table(lo, hi, C, LIMIT_CLEARANCE)
+        self._lo_list, self._hi_list = lo.tolist(), hi.tolist()
         self._set_band()
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
+        self._A.setflags(write=False)
         return int(idx.size)
 
     def _set_band(self) -> None:
         """The margin band ``[q_min + margin, q_max - margin]`` [rad] (mode ``'margin'``)."""
-        self._lo_m = self._lo + self.margin
-        self._hi_m = self._hi - self.margin
-        self._lo_m_list, self._hi_m_list = self._lo_m.tolist(), self._hi_m.tolist()
-        self._lo_list, self._hi_list = self._lo.tolist(), self._hi.tolist()
+        self._lo_m_list = (self._lo + self.margin).tolist()
+        self._hi_m_list = (self._hi - self.margin).tolist()
 
     @property
     def joint_indices(self) -> np.ndarray:
@@ -223,43 +145,48 @@ class JointLimitTask(Task):
         return self._idx
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
-        """``(H, grad H)`` on the regulated joints at ``state`` (Eq. (15)-(16))."""
-        return joint_limit_index(state.joints[self._jsel], self._lo, self._hi, self._C)
+        """``(H, grad H)`` on the regulated joints at ``state`` (Eq. (15)-(16), saturated).
 
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write the gradient rows or the margin band (see the class docstring).
-
-        Per joint in plain floats (a handful of joints; lists sized at bind): the band, or
-        the index and its gradient (:func:`joint_limit_index`'s own routine).
+        Distances to a limit closer than 1 % of the joint's range count as 1 % (see
+        :mod:`uvms_qp.analytic.joint_limits`).
         """
-        q = state.joint_floats()  # shared with the other consumers of this state
-        if self._subset is not None:
-            q = [q[i] for i in self._subset]
-        A[:] = self._A
+        q = state.joints if self._jsel is None else state.joints[self._jsel]
+        H, grad = index_and_gradient(q.tolist(), self._table)
+        return H, np.array(grad)
+
+    def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
+        """The gradient rows or the margin band (see the class docstring).
+
+        Per joint in plain floats (a handful of joints; the constants are prepared at bind).
+        """
+        q = (state.joints if self._jsel is None else state.joints[self._jsel]).tolist()
         if self.mode == "margin":
             k = self.gain
-            lower[:] = [(a - x) * k for a, x in zip(self._lo_m_list, q, strict=False)]
-            upper[:] = [(b - x) * k for b, x in zip(self._hi_m_list, q, strict=False)]
-            self.last_error = np.array((min(min(map(sub, q, self._lo_list)),
-                                             min(map(sub, self._hi_list, q))),))
-            return
-        H, g = _index_floats(q, self._per_joint)
+            lower = []
+            upper = []
+            distance = math.inf  # to the nearest limit [rad]
+            for a, b, lo, hi, x in zip(self._lo_m_list, self._hi_m_list, self._lo_list,
+                                       self._hi_list, q, strict=True):
+                lower.append((a - x) * k)
+                upper.append((b - x) * k)
+                d = x - lo if x - lo < hi - x else hi - x
+                if d < distance:
+                    distance = d
+            self.last_error = np.array((distance,))
+            return self._A, lower, upper
+        H, g = index_and_gradient(q, self._table)
         self.value = H
         self.last_error = np.array((H,))
         if self.mode == "damping":
-            lower[:] = 0.0
-            upper[:] = 0.0
             # a new array every tick: the controller refreshes weights it has not seen
-            self._row_weights = np.array([self.weight * (1.0 + abs(x)) for x in g])
-            return
+            self.row_weights = np.array([self.weight * (1.0 + abs(x)) for x in g])
+            return self._A, 0.0, 0.0
         scale = -self.gain
         if self.normalize:
             norm = math.sqrt(sum(x * x for x in g))
             scale = scale / norm if norm > 1e-12 else 0.0
         sides = [scale * x for x in g]
-        lower[:] = sides
-        upper[:] = lower
+        return self._A, sides, sides
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -8,8 +8,9 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .._validation import FloatArray, as_scalar
+from ..analytic.manipulability import shaping_function
 from ..errors import InputError
-from ._common import TWIST_AXES, check_frame, parse_axes
+from ._common import TWIST_AXES, check_choice, check_frame, parse_axes
 from .task import Task
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -158,17 +159,14 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
             default: the 3 linear rows).
 
     Returns:
-        ``(w, grad)`` with ``grad`` of shape (n,).
+        ``(w, grad)`` with ``grad`` a new array of shape (n,).
     """
-    w, grad = manipulability_floats(J6, rows)
+    w, grad = _measure(J6, rows)
     return w, np.array(grad)
 
 
-def manipulability_floats(J6: FloatArray, rows: Any = None) -> tuple[float, list[float]]:
-    """:func:`manipulability_and_gradient` with the gradient as a list of plain floats.
-
-    For per-tick code that writes the gradient into row buffers itself (same numbers).
-    """
+def _measure(J6: FloatArray, rows: Any) -> tuple[float, list[float]]:
+    """:func:`manipulability_and_gradient` with the gradient as plain floats."""
     n = J6.shape[1]
     cols = J6.T.tolist()
     if rows is None:
@@ -201,22 +199,6 @@ def default_rows(model: Model) -> list[int]:
     return [TWIST_AXES.index(a) for a in default_axes(model)]
 
 
-def shaping_function(w: float, threshold: float) -> float:
-    r"""Shaping function ``k(w)`` blending station keeping and singularity avoidance.
-
-    ``000_7b5f597fe4e36aa4.txt``, Section 4.3 (Eq. (21) and its Figure 4): ``k = 0`` when
-    ``w >= threshold``, ``k = 1`` when ``w < threshold / 2``, and in between the smooth (C1)
-    blend ``k = (1 + cos(pi (w - threshold/2) / (threshold/2))) / 2``. (The paper gives the
-    function as a figure; this is our documented choice with the stated end points.)
-    """
-    half = 0.5 * threshold
-    if w >= threshold:
-        return 0.0
-    if w < half:
-        return 1.0
-    return 0.5 * (1.0 + math.cos(math.pi * (w - half) / half))
-
-
 class ManipulabilityTask(Task):
     r"""Keep the arm dexterous using Yoshikawa's manipulability ``w`` of the arm Jacobian.
 
@@ -233,11 +215,12 @@ class ManipulabilityTask(Task):
       first-order barrier that keeps ``w >= minimum``: with ``gain = 1/dt`` it is exactly
       ``w + dt grad w . qdot >= minimum``; a smaller gain approaches the floor gradually.
     * ``"shaping"``: rows ``qdot = k(w) (1 - sign(w_dot)) / 2 lambda grad w`` (Eq. (21)):
-      :func:`shaping_function` ``k`` with the threshold ``rho_bar``, and the sign switch that
-      only intervenes while ``w`` is not increasing (``sign(w_dot) = -1`` for ``w_dot <= 0``);
-      ``w_dot`` is the finite difference of ``w`` between evaluations (0 at the first one).
-      Place it in the same level as a ``StationKeepingTask(blend=<this task's name>)``, whose
-      demand is then scaled by ``1 - k``: the level asks
+      :func:`~uvms_qp.analytic.shaping_function` ``k`` with the threshold ``rho_bar``, and the
+      sign switch that only intervenes while ``w`` is not increasing (``sign(w_dot) = -1`` for
+      ``w_dot <= 0``); ``w_dot`` is the finite difference of ``w`` between evaluations (0 at
+      the first one). Place it in the same level as a
+      ``StationKeepingTask(blend=<this task's name>)``, whose demand is then scaled by
+      ``1 - k``: the level asks
       ``[vehicle: (1 - k) K_s e_s; arm: k s lambda grad w]``, the secondary term of Eq. (21).
 
     Args:
@@ -269,9 +252,7 @@ class ManipulabilityTask(Task):
         name: str | None = None,
     ) -> None:
         super().__init__(name=name, weight=weight)
-        if mode not in ("ascend", "floor", "shaping"):
-            raise InputError(f"{self.name}.mode: expected 'ascend', 'floor' or 'shaping', got "
-                             f"{mode!r}")
+        check_choice(mode, ("ascend", "floor", "shaping"), f"{self.name}.mode")
         if not isinstance(frame, str) or not frame:
             raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
         self.mode = mode
@@ -288,16 +269,16 @@ class ManipulabilityTask(Task):
         if mode == "shaping" and self.threshold is None:
             raise InputError(f"{self.name}.threshold: required in mode 'shaping'")
         self.axes: list[str] = []
-        self._sel = np.arange(3)
         self._rows: list[int] | None = None
         self._select = np.zeros((0, 0))
+        self._zeros: list[float] = []  # vehicle columns of the floor row
         self._nvh = 0
         self._prev: tuple[float, float] | None = None
         self._w_dot = 0.0
         self.value = float("nan")
         self.shaping = 0.0
-        self._key: tuple[Any, ...] = ()
-        self._zeros: list[float] = []
+        self._memo_serial = -1  # the state whose (w, grad w) is in _memo
+        self._memo: tuple[float, list[float]] = (float("nan"), [])
 
     @property
     def equality_rows(self) -> bool:
@@ -310,18 +291,18 @@ class ManipulabilityTask(Task):
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
         axes = self._axes_arg if self._axes_arg is not None else default_axes(model)
         self.axes = list(axes)
-        self._sel = np.array([TWIST_AXES.index(a) for a in axes], dtype=int)
-        self._rows = None if self._sel.tolist() == [0, 1, 2] else self._sel.tolist()
-        self._key = ("manipulability", self.frame, None if self._rows is None
-                     else tuple(self._rows))
+        rows = [TWIST_AXES.index(a) for a in axes]
+        self._rows = None if rows == [0, 1, 2] else rows
         self._nvh = model.n_vehicle
-        self._zeros = [0.0] * model.n_vehicle  # vehicle columns of the floor row
         k = sum(a in ("x", "y", "z") for a in axes)  # linear rows: [m] each, angular: [1]
         self.error_unit = "1" if k == 0 else "m" if k == 1 else f"m^{k}"
         self.rate_unit = f"{self.error_unit}/s" if self.mode == "floor" else "rad/s"
         n = model.n_joints
         self._select = np.zeros((n, model.nv))  # rows of ascend/shaping: qdot = ...
         self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
+        self._select.setflags(write=False)
+        self._zeros = [0.0] * model.n_vehicle
+        self._memo_serial = -1
         return 1 if self.mode == "floor" else n
 
     def reset(self) -> None:
@@ -331,42 +312,32 @@ class ManipulabilityTask(Task):
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
         """``(w, grad w)`` at ``state`` (gradient over the arm joints, (n_joints,))."""
-        w, g = self._value(state)
-        return w, np.array(g)
+        w, grad = self._value(state)
+        return w, np.array(grad)
 
     def _value(self, state: State) -> tuple[float, list[float]]:
-        """``(w, grad w)`` as plain floats, computed once per state and measure.
+        """``(w, grad w)`` in plain floats, computed once per state.
 
-        Kept on the state (:meth:`~uvms_qp.model.State.store`), so every task reading the same
-        measure in the same tick (another manipulability task, a blended
-        :class:`StationKeepingTask`) shares one evaluation.
+        A task linked to this one (a blended :class:`StationKeepingTask`) reads the same
+        numbers in the same tick.
         """
-        value = state.derived(self._key)
-        if value is None:
-            value = state.store(self._key, manipulability_floats(
-                state.arm_jacobian(self.frame), self._rows))
-        return value  # type: ignore[no-any-return]
+        if self._memo_serial != state.serial:
+            self._memo = _measure(state.arm_jacobian(self.frame), self._rows)
+            self._memo_serial = state.serial
+        return self._memo
 
     def shaping_factor(self, state: State) -> float:
-        """``k(w)`` of :func:`shaping_function` at ``state`` (mode ``"shaping"``)."""
-        return shaping_function(self._value(state)[0], self.threshold)  # type: ignore[arg-type]
+        """``k(w)`` of :func:`~uvms_qp.analytic.shaping_function` at ``state``."""
+        k: float = shaping_function(self._value(state)[0], self.threshold)  # type: ignore[arg-type]
+        return k
 
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write the rows of the selected mode (see the class docstring).
-
-        The gradient stays a list of plain floats (a handful of joints): the floor row is
-        written in one assignment, the ascend/shaping sides as one list each.
-        """
+    def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
+        """The rows of the selected mode (see the class docstring)."""
         w, g = self._value(state)
         self.value = w
         self.last_error = np.array((w,))
         if self.mode == "floor":
-            A[0] = self._zeros + g
-            lower[0] = self.gain * (self.minimum - w)  # type: ignore[operator]
-            upper[0] = np.inf
-            return
-        A[:] = self._select
+            return np.array([self._zeros + g]), self.gain * (self.minimum - w), np.inf  # type: ignore[operator]
         scale = self.gain
         if self.mode == "shaping":
             if self._prev is not None and t > self._prev[0]:
@@ -376,8 +347,7 @@ class ManipulabilityTask(Task):
             self.shaping = shaping_function(w, self.threshold)  # type: ignore[arg-type]
             scale *= self.shaping * switch
         sides = [scale * x for x in g]
-        lower[:] = sides
-        upper[:] = lower
+        return self._select, sides, sides
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
-from ._common import check_frame
+from ._common import check_choice, check_frame
 from .task import Task
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -62,8 +62,7 @@ class PayloadMomentTask(Task):
         name: str | None = None,
     ) -> None:
         super().__init__(name=name, weight=weight)
-        if mode not in ("reduce", "bound"):
-            raise InputError(f"{self.name}.mode: expected 'reduce' or 'bound', got {mode!r}")
+        check_choice(mode, ("reduce", "bound"), f"{self.name}.mode")
         if not isinstance(frame, str) or not frame:
             raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
         if not isinstance(normalize, bool):
@@ -77,8 +76,7 @@ class PayloadMomentTask(Task):
         if mode == "bound" and self.maximum is None:
             raise InputError(f"{self.name}.maximum: required in mode 'bound'")
         self.normalize = normalize
-        self._nvh = 0
-        self._zeros: list[float] = []
+        self._zeros: list[float] = []  # vehicle columns of the bound row
         self._select = np.zeros((0, 0))
         self.value = float("nan")
 
@@ -91,55 +89,47 @@ class PayloadMomentTask(Task):
         check_frame(model, self.frame, f"{self.name}.frame")
         if model.n_joints == 0:
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
-        self._nvh = model.n_vehicle
-        self._zeros = [0.0] * model.n_vehicle  # vehicle columns of the bound row
+        self._zeros = [0.0] * model.n_vehicle
         self.rate_unit = "N m^2/s" if self.mode == "bound" else "rad/s"
         n = model.n_joints
         self._select = np.zeros((n, model.nv))  # rows of the reduce mode: qdot = ...
         self._select[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
+        self._select.setflags(write=False)
         return 1 if self.mode == "bound" else n
 
     def compute_value(self, state: State) -> tuple[float, FloatArray]:
-        """``(M, grad M)`` at ``state`` (gradient over the arm joints)."""
-        x, y = self._lever_arm(state)
-        Jp = state.arm_jacobian(self.frame)
-        F = self.force
-        grad = (2.0 * F * x) * Jp[0] + (2.0 * F * y) * Jp[1]
-        return (x * x + y * y) * F, grad
+        """``(M, grad M)`` at ``state`` [N m^2, N m^2/rad] (gradient over the arm joints)."""
+        M, grad = self._moment(state)
+        return M, np.array(grad)
 
-    def _lever_arm(self, state: State) -> tuple[float, float]:
-        """``(x_E, y_E)`` [m]: the frame's origin in arm-base coordinates (plain floats)."""
-        x, y, _ = state.arm_position_floats(self.frame)
-        return x, y
+    def _moment(self, state: State) -> tuple[float, list[float]]:
+        """``M`` and ``grad M`` (plain floats, one value per joint).
 
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write the reduce rows or the bound row (see the class docstring).
-
-        The operations of :meth:`compute_value` in plain floats (one value per joint), the rows
-        written with one assignment per buffer.
+        ``(x_E, y_E)`` is the frame's origin in arm-base coordinates; the gradient combines the
+        first two rows of the arm Jacobian in arm-base axes.
         """
-        x, y = self._lever_arm(state)
+        x, y, _ = state.arm_position(self.frame).tolist()
         F = self.force
-        M = (x * x + y * y) * F
-        self.value = M
-        self.last_error = np.array((M,))
         a, b = 2.0 * F * x, 2.0 * F * y
         rx, ry = state.arm_jacobian(self.frame)[:2].tolist()
-        g = [a * u + b * v for u, v in zip(rx, ry, strict=True)]
+        grad = []
+        for u, v in zip(rx, ry, strict=True):
+            grad.append(a * u + b * v)
+        return (x * x + y * y) * F, grad
+
+    def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
+        """The reduce rows or the bound row (see the class docstring)."""
+        M, g = self._moment(state)
+        self.value = M
+        self.last_error = np.array((M,))
         if self.mode == "bound":
-            A[0] = self._zeros + g
-            lower[0] = -np.inf
-            upper[0] = self.gain * (self.maximum - M)  # type: ignore[operator]
-            return
-        A[:] = self._select
+            return np.array([self._zeros + g]), -np.inf, self.gain * (self.maximum - M)  # type: ignore[operator]
         scale = -self.gain
         if self.normalize:
             norm = math.sqrt(sum(v * v for v in g))
             scale = scale / norm if norm > 1e-12 else 0.0
         sides = [scale * v for v in g]
-        lower[:] = sides
-        upper[:] = lower
+        return self._select, sides, sides
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

@@ -9,6 +9,7 @@ import numpy as np
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from ..model.selection import check_joint_list, compact_index, joint_indices
+from ._common import check_choice
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -46,10 +47,8 @@ class PostureTask(ErrorTask):
         name: str | None = None,
     ) -> None:
         super().__init__(name=name, weight=weight, gain=gain)
-        if reference not in ("activation", "middle"):
-            raise InputError(f"{self.name}.reference: expected 'activation' or 'middle', got "
-                             f"{reference!r}")
-        self.reference = reference
+        self.reference = check_choice(reference, ("activation", "middle"),
+                                      f"{self.name}.reference")
         self.joints = check_joint_list(joints, f"{self.name}.joints")
         self._posture_arg = None if posture is None else as_vector(posture, f"{self.name}.posture")
         self._idx = np.zeros(0, dtype=int)
@@ -70,9 +69,10 @@ class PostureTask(ErrorTask):
                 raise InputError(f"{self.name}: reference='middle' needs finite joint limits")
             self._posture_arg = 0.5 * (lo + hi)
         self._idx = idx
-        self._jsel = compact_index(idx)
+        self._jsel = None if idx.tolist() == list(range(model.n_joints)) else compact_index(idx)
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
+        self._A.setflags(write=False)
         self._set_reference(self._posture_arg)
         return int(idx.size)
 
@@ -84,32 +84,12 @@ class PostureTask(ErrorTask):
         """Forget the activation posture."""
         self._set_reference(self._posture_arg)
 
-    def compute_error(self, state: State, t: float) -> FloatArray:
-        """``q_ref - q`` on the selected joints [rad]."""
-        q = state.joints[self._jsel]
+    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+        """``(S, q_ref - q, None)`` on the selected joints [rad] (``S`` selects their columns)."""
+        q = state.joints if self._jsel is None else state.joints[self._jsel]
         if self._q_ref is None:
             self._set_reference(q)
-        return self._q_ref - q  # type: ignore[operator]
-
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write ``S zeta = K (q_ref - q)_S``.
-
-        :meth:`compute_error` and the constant selector in one pass (the joint angles are
-        already an array: array operations cost no more than plain floats here).
-        """
-        if not self._fused:
-            super().fill(state, t, A, lower, upper)
-            return
-        q = state.joints[self._jsel]
-        if self._q_ref is None:
-            self._set_reference(q)
-        A[:] = self._A
-        self._set_sides(self._q_ref - q, None, lower, upper)  # type: ignore[operator]
-
-    def compute_jacobian(self, state: State, t: float) -> FloatArray:
-        """Selector of the joint-rate columns (constant)."""
-        return self._A
+        return self._A, self._q_ref - q, None  # type: ignore[operator]
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

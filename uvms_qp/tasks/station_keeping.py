@@ -9,23 +9,15 @@ import numpy as np
 
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
-from ..model.selection import compact_index
-from ._common import (
-    _TWO_PI,
-    ANGLE_AXES,
-    EtaRows,
-    eta_axes,
-    parse_axes,
-    pose_units,
-    vehicle_pose_jacobian,
-    wrap_angles_in_place,
-)
+from ..model.transforms import matrix_to_rpy
+from ._common import ANGLE_AXES, as_pose, check_choice, parse_axes, pose_units
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 _ALL = ("x", "y", "z", "phi", "theta", "psi")
+_TWO_PI = 2.0 * math.pi
 _ACTUATOR = {"phi": "p", "theta": "q"}
 
 
@@ -46,6 +38,9 @@ class StationKeepingTask(ErrorTask):
         axes: Coordinates to hold, from ``x, y, z, phi, theta, psi`` (planar ``x, y, psi``);
             default ``x, y, z, psi`` (planar ``x, y, psi``). Roll/pitch only if actuated.
         target: Set point for the selected coordinates [m, rad], or None (see ``hold``).
+        pose: Alternatively the set point as a vehicle pose in the world frame
+            (``pinocchio.SE3``, 4x4 homogeneous matrix or ``{"xyz", "rpy"}``); its selected
+            coordinates (position, Z-Y-X Euler angles) are held.
         hold: ``"activation"`` or ``"current"`` when no target is given.
         blend: Name of a :class:`~uvms_qp.tasks.ManipulabilityTask` in mode ``"shaping"`` of the
             same stack: the demand is scaled by ``1 - k(w)`` (``000_7b5f597fe4e36aa4.txt,
@@ -64,6 +59,7 @@ class StationKeepingTask(ErrorTask):
         *,
         axes: list[str] | None = None,
         target: list[float] | None = None,
+        pose: Any = None,
         hold: Literal["activation", "current"] = "activation",
         blend: str | None = None,
         gain: float | list[float] = 1.0,
@@ -72,24 +68,22 @@ class StationKeepingTask(ErrorTask):
     ) -> None:
         super().__init__(name=name, weight=weight, gain=gain)
         self._axes_arg = None if axes is None else parse_axes(axes, _ALL, f"{self.name}.axes")
-        if hold not in ("activation", "current"):
-            raise InputError(f"{self.name}.hold: expected 'activation' or 'current', got {hold!r}")
-        self.hold = hold
+        self.hold = check_choice(hold, ("activation", "current"), f"{self.name}.hold")
         if blend is not None and (not isinstance(blend, str) or not blend):
             raise InputError(f"{self.name}.blend: expected a task name, got {blend!r}")
+        if target is not None and pose is not None:
+            raise InputError(f"{self.name}: give target= or pose=, not both")
         self.blend = blend
         self._blend_task: Any = None
         self._target_arg = None if target is None else as_vector(target, f"{self.name}.target")
+        self._pose_arg = None if pose is None else as_pose(pose, f"{self.name}.pose")
         self.axes: list[str] = []
-        self._idx: Any = np.zeros(0, dtype=int)
+        self._idx: Any = slice(0, 0)
         self._angle_pos: list[int] = []
-        self._eta_pos: list[int] = []
-        self._rows: EtaRows | None = None
         self._target: FloatArray | None = None
-        self._target_list: list[float] | None = None
 
     def _bind(self, model: Model) -> int:
-        known = eta_axes(model)
+        known = model.eta_names
         if not known:
             raise InputError(f"{self.name}: model {model.name!r} has a fixed base; station keeping "
                              "needs a vehicle")
@@ -108,18 +102,25 @@ class StationKeepingTask(ErrorTask):
             raise InputError(f"{self.name}.target: expected {len(axes)} values for axes "
                              f"{axes}, got {self._target_arg.shape[0]}")
         self.axes = list(axes)
-        self._eta_pos = [known.index(a) for a in axes]
-        self._idx = compact_index(self._eta_pos)
+        eta_pos = [known.index(a) for a in axes]
+        self._idx = np.array(eta_pos, dtype=np.intp)
         self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
-        self._rows = EtaRows(model, self._eta_pos)
-        self._hold(self._target_arg)
+        if self._pose_arg is not None:
+            self._target_arg = self._pose_eta(model, self._pose_arg)[eta_pos]
+        self._set_point(self._target_arg)
         self.error_unit, self.rate_unit = pose_units(axes)
         return len(axes)
 
-    def _hold(self, value: FloatArray | None) -> None:
-        """Set the held values (a copy, also kept as plain floats for :meth:`fill`), or None."""
-        self._target = None if value is None else value.copy()
-        self._target_list = None if value is None else value.tolist()
+    @staticmethod
+    def _pose_eta(model: Model, T: FloatArray) -> FloatArray:
+        """``eta`` of a world pose of the vehicle (planar: x, y and the yaw)."""
+        if model.vehicle_kind == "spatial":
+            return np.concatenate((T[:3, 3], matrix_to_rpy(T[:3, :3])))
+        return np.array((T[0, 3], T[1, 3], math.atan2(T[1, 0], T[0, 0])))
+
+    def _set_point(self, value: FloatArray | None) -> None:
+        """Set the held values (a copy), or None."""
+        self._target = None if value is None else np.array(value)
 
     def link(self, tasks: dict[str, Any]) -> None:
         """Find the manipulability task named by ``blend``."""
@@ -136,69 +137,57 @@ class StationKeepingTask(ErrorTask):
 
     def reset(self) -> None:
         """Forget the activation pose (a new one is taken at the next evaluation)."""
-        self._hold(self._target_arg)
+        self._set_point(self._target_arg)
 
-    def set_target(self, target: Any) -> None:
-        """Set the held values for the selected coordinates [m, rad]."""
-        value = as_vector(target, f"{self.name}.target", len(self.axes) or None)
+    def set_target(self, target: Any = None, *, pose: Any = None) -> None:
+        """Set the held values for the selected coordinates [m, rad], or a vehicle pose.
+
+        Args:
+            target: Values for the selected coordinates, in order.
+            pose: Alternatively a world pose of the vehicle (``pinocchio.SE3``, 4x4 or
+                ``{"xyz", "rpy"}``); needs the task bound (its coordinates are picked then).
+        """
+        if (target is None) == (pose is None):
+            raise InputError(f"{self.name}.set_target: give target= or pose=")
+        if pose is not None:
+            model = self._require_bound()
+            value = self._pose_eta(model, as_pose(pose, f"{self.name}.pose"))[
+                [model.eta_names.index(a) for a in self.axes]]
+        else:
+            value = as_vector(target, f"{self.name}.target", len(self.axes) or None)
         self._target_arg = value
-        self._hold(value)
+        self._set_point(value)
 
     @property
     def held_pose(self) -> FloatArray | None:
         """The current set point on the selected coordinates, or None before activation."""
         return self._target
 
-    def compute_error(self, state: State, t: float) -> FloatArray:
-        """``(eta_d - eta)`` on the selected coordinates, angles wrapped [m, rad]."""
-        eta = state.eta[self._idx]
-        if self._target is None:
+    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+        """``(J_eta,S, (eta_d - eta)_S, None)``, angles wrapped [m, rad]."""
+        idx = self._idx
+        eta = state.eta.take(idx)
+        J = state.vehicle_pose_jacobian().take(idx, axis=0)
+        target = self._target
+        if target is None:
             if self.hold == "current":
-                return np.zeros(len(self.axes))
-            self._hold(eta)
-        e = self._target - eta
-        wrap_angles_in_place(e, self._angle_pos)
+                return J, np.zeros(idx.shape[0]), None
+            target = self._target = eta
+        e = target - eta
+        for i in self._angle_pos:
+            e[i] = (e.item(i) + math.pi) % _TWO_PI - math.pi
         if self._blend_task is not None:
             e *= 1.0 - self._blend_task.shaping_factor(state)
-        return e
-
-    def compute_jacobian(self, state: State, t: float) -> FloatArray:
-        """Rows of the vehicle-pose Jacobian ``J_eta`` for the selected coordinates."""
-        return vehicle_pose_jacobian(state)[self._idx]
-
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write ``J_eta,S zeta = K (eta_d - eta)_S`` (no feed-forward).
-
-        The operations of :meth:`compute_error` per coordinate in plain floats (one to six
-        values); the rows are written from the state's plain-float ``J_eta`` entries.
-        """
-        if not self._fused:
-            super().fill(state, t, A, lower, upper)
-            return
-        eta = state.eta_floats()
-        target = self._target_list
-        if target is None and self.hold == "activation":
-            self._hold(np.array([eta[i] for i in self._eta_pos]))
-            target = self._target_list
-        if target is None:  # hold="current": the set point is the pose itself
-            e = [0.0] * len(self._eta_pos)
-        else:
-            e = [x - eta[i] for x, i in zip(target, self._eta_pos, strict=True)]
-            for i in self._angle_pos:
-                e[i] = (e[i] + math.pi) % _TWO_PI - math.pi
-            if self._blend_task is not None:
-                scale = 1.0 - self._blend_task.shaping_factor(state)
-                e = [x * scale for x in e]
-        self._rows.write(state, A)  # type: ignore[union-attr]
-        self._set_sides_floats(e, lower, upper)
+        return J, e, None
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
-        return (*super().updatable(), "target")
+        return (*super().updatable(), "target", "pose")
 
     def _apply_update(self, key: str, value: Any) -> None:
         if key == "target":
             self.set_target(value)
+        elif key == "pose":
+            self.set_target(pose=value)
         else:
             super()._apply_update(key, value)

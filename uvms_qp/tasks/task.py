@@ -2,25 +2,31 @@
 
 A task is built from keyword arguments (so a scenario loader can build it from a table), bound to a
 model once (:meth:`Task.bind` checks frames, joints and dimensions and fixes the row count), then
-evaluated every control tick on a :class:`~uvms_qp.model.State`:
+evaluated every control tick on a :class:`~uvms_qp.model.State`. Each task class writes exactly one
+evaluation:
 
-* :meth:`Task.rows` returns a fresh :class:`~uvms_qp.rows.Rows` (for users and tests);
-* :meth:`Task.fill` writes the same rows into caller-owned buffers (the controller's hot path, no
-  allocation of the row block).
+* error-regulating tasks (:class:`ErrorTask`) implement :meth:`ErrorTask.error_rows`, returning
+  the Jacobian ``J`` of the regulated quantity ``x`` over zeta (``x_dot = J zeta``), the error
+  ``e = x_d - x`` and the feed-forward rate ``x_dot_d``; the base writes the closed-loop
+  inverse-kinematics rows
 
-Error-regulating tasks (:class:`ErrorTask`) implement :meth:`ErrorTask.compute_error` ``e`` and
-:meth:`ErrorTask.compute_jacobian` ``J`` (the Jacobian of the regulated quantity ``x`` over zeta,
-``x_dot = J zeta``) and the base assembles the closed-loop inverse-kinematics rows
+      J zeta = x_dot_d + K e,
 
-    J zeta = x_dot_d + K e,      e = x_d - x,
+  the closed-loop form of ``000_7b5f597fe4e36aa4.txt, Eq. (16)``;
+* other tasks (set-based rows, objectives) implement :meth:`Task.evaluate` ``-> (J, lower,
+  upper)``.
 
-the closed-loop form of ``000_7b5f597fe4e36aa4.txt, Eq. (16)``.
+The rest is defined once here: :meth:`Task.fill` writes the rows into caller-owned buffers (what
+the controller calls every tick), :meth:`Task.rows` returns fresh :class:`~uvms_qp.rows.Rows`,
+and ``compute_error`` / ``compute_jacobian`` / ``compute_feedforward`` are views of
+:meth:`ErrorTask.error_rows`.
 """
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, final
 
 import numpy as np
 
@@ -58,9 +64,10 @@ class Task(ABC):
     Subclasses set the class attributes ``type_name`` (the scenario registry key), ``error_unit``
     (unit of the task error or objective, e.g. ``"m"``) and ``rate_unit`` (unit of the rows, e.g.
     ``"m/s"``), implement :meth:`_bind` (validation against the model; returns the row count) and
-    :meth:`fill`. The class units describe every configuration of the task; a task whose rows
-    depend on its mode or axes narrows them on the instance in :meth:`_bind` (a position-only
-    end-effector task reports ``"m/s"``), and the bound instance's units are the ones reported.
+    :meth:`evaluate` (or :meth:`ErrorTask.error_rows`). The class units describe every
+    configuration of the task; a task whose rows depend on its mode or axes narrows them on the
+    instance in :meth:`_bind` (a position-only end-effector task reports ``"m/s"``), and the
+    bound instance's units are the ones reported.
 
     Attributes:
         name: Unique name of the task inside a stack.
@@ -68,6 +75,10 @@ class Task(ABC):
             (weights only act within a level; levels are strict priorities).
         model: The bound model, or None before :meth:`bind`.
         dim: Number of rows (known after :meth:`bind`).
+        last_error: The task error (error tasks) or objective value at the last evaluation
+            [error_unit], a new array every evaluation; None before the first one.
+        row_weights: Per-row weights (dim,), task weight included; a new array whenever they
+            change (so a consumer re-reads them only then).
     """
 
     type_name: ClassVar[str] = "task"
@@ -79,8 +90,23 @@ class Task(ABC):
         self.weight = as_scalar(weight, f"{self.name}.weight", positive=True)
         self.model: Model | None = None
         self.dim = 0
-        self._row_weights: FloatArray = np.zeros(0)
+        self.row_weights: FloatArray = np.zeros(0)
         self.last_error: FloatArray | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Keep the methods the base classes mark final (``fill``, ``rows``, ...) final.
+
+        A task implements :meth:`evaluate` or :meth:`ErrorTask.error_rows`; everything built on
+        them is written once, in the base classes.
+        """
+        super().__init_subclass__(**kwargs)
+        sealed = {name for base in cls.__mro__[1:] for name, member in vars(base).items()
+                  if getattr(member, "__final__", False)}
+        overridden = sorted(name for name in sealed & cls.__dict__.keys()
+                            if not getattr(cls.__dict__[name], "__final__", False))
+        if overridden:
+            raise TypeError(f"{cls.__name__} overrides {', '.join(overridden)}: a task class "
+                            "implements evaluate (or error_rows for an ErrorTask) only")
 
     # ----------------------------------------------------------------------------------- binding
     def bind(self, model: Model) -> Task:
@@ -93,7 +119,7 @@ class Task(ABC):
         dim = self._bind(model)
         self.model = model
         self.dim = int(dim)
-        self._row_weights = np.full(self.dim, self.weight)
+        self.row_weights = np.full(self.dim, self.weight)
         self._update_row_weights()
         return self
 
@@ -126,28 +152,40 @@ class Task(ABC):
         """True when every row is an equality (tasks with inequality rows override this)."""
         return True
 
-    @property
-    def row_weights(self) -> FloatArray:
-        """Per-row weights (dim,), task weight included."""
-        return self._row_weights
-
     # ----------------------------------------------------------------------------------- evaluate
     @abstractmethod
+    def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
+        """The rows at ``(state, t)``: ``(J, lower, upper)``.
+
+        ``J`` is ``(dim, nv)``; ``lower`` and ``upper`` are ``(dim,)`` arrays or numbers (one
+        value for every row). The arrays may be read-only views of the state or of the task:
+        copy them before modifying. Sets :attr:`last_error`.
+        """
+
+    @final
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
         """Write the rows at ``(state, t)`` into ``A`` (dim, nv), ``lower`` and ``upper`` (dim,).
 
-        The buffers may hold stale values; every entry must be written.
+        The buffers may hold stale values: every entry is written.
         """
+        J, lo, hi = self.evaluate(state, t)
+        A[:] = J
+        lower[:] = lo
+        if hi is lo:  # equality rows
+            upper[:] = lower
+        else:
+            upper[:] = hi
 
+    @final
     def rows(self, state: State, t: float = 0.0) -> Rows:
         """Rows ``lower <= A zeta <= upper`` at ``state`` and time ``t`` [s] (fresh arrays)."""
         model = self._require_bound()
-        A = np.zeros((self.dim, model.nv))
-        lower = np.zeros(self.dim)
-        upper = np.zeros(self.dim)
+        A = np.empty((self.dim, model.nv))
+        lower = np.empty(self.dim)
+        upper = np.empty(self.dim)
         self.fill(state, t, A, lower, upper)
-        return Rows(A, lower, upper, self._row_weights.copy(), self.name)
+        return Rows(A, lower, upper, self.row_weights.copy(), self.name)
 
     def residual(self, state: State, zeta: Any, t: float = 0.0) -> float:
         """Norm of the row violation at ``zeta`` [rate_unit]: distance of ``A zeta`` to its band."""
@@ -156,13 +194,9 @@ class Task(ABC):
         return float(np.linalg.norm(self.rows(state, t).violation(x)))
 
     def error_norm(self) -> float:
-        """Norm of the last task error or objective value computed by :meth:`fill` [error_unit].
-
-        NaN before the first evaluation.
-        """
-        if self.last_error is None:
-            return float("nan")
-        return float(np.sqrt(self.last_error @ self.last_error))
+        """Norm of :attr:`last_error` [error_unit]; NaN before the first evaluation."""
+        e = self.last_error
+        return float("nan") if e is None else math.sqrt(e @ e)
 
     # ----------------------------------------------------------------------------------- run time
     def reset(self) -> None:  # noqa: B027 - optional hook
@@ -193,7 +227,7 @@ class Task(ABC):
         if key == "weight":
             self.weight = as_scalar(value, f"{self.name}.weight", positive=True)
             if self.model is not None:
-                self._row_weights = np.full(self.dim, self.weight)
+                self.row_weights = np.full(self.dim, self.weight)
                 self._update_row_weights()
         else:  # pragma: no cover - guarded by update()
             raise InputError(f"{self.name}.update: cannot update {key!r}")
@@ -211,9 +245,8 @@ class ErrorTask(Task):
     """A task regulating an error ``e = x_d - x`` with gain ``K`` [1/s].
 
     Rows: ``J zeta = x_dot_d + K e`` (``000_7b5f597fe4e36aa4.txt, Eq. (16)``), where ``J`` is the
-    Jacobian of ``x`` over zeta and ``x_dot_d`` the feed-forward rate of the target.
-    Subclasses implement :meth:`compute_error` and :meth:`compute_jacobian`, and may override
-    :meth:`compute_feedforward`.
+    Jacobian of ``x`` over zeta and ``x_dot_d`` the feed-forward rate of the target. Subclasses
+    implement :meth:`error_rows` only.
 
     Attributes:
         gain: Scalar gain or per-row gains [1/s].
@@ -223,89 +256,66 @@ class ErrorTask(Task):
                  gain: float | list[float] = 1.0) -> None:
         super().__init__(name=name, weight=weight)
         self.gain: float | FloatArray = as_gain(gain, f"{self.name}.gain")
-        self._fused = False
-
-    def _defines_compute_methods(self) -> bool:
-        """True when every class with its own :meth:`fill` sees the instance's ``compute_*``.
-
-        Checked at bind: a fused ``fill`` (the same operations as the ``compute_*`` methods of
-        its class) is valid only if no subclass replaced one of them.
-        """
-        cls = type(self)
-        names = ("compute_error", "compute_jacobian", "compute_feedforward")
-        # every class below ErrorTask with its own fill must see the methods the instance has
-        return all(getattr(cls, name) is getattr(owner, name)
-                   for owner in cls.__mro__[: cls.__mro__.index(ErrorTask)]
-                   if "fill" in owner.__dict__ for name in names)
+        self._gains = np.zeros(0)  # one gain per row (set at bind)
 
     def bind(self, model: Model) -> Task:
         """Bind (see :meth:`Task.bind`) and check the gain length against the row count."""
         super().bind(model)
-        # a fused fill reproduces its own class's compute_* methods; a subclass overriding any
-        # of them gets the generic fill that calls them
-        self._fused = self._defines_compute_methods()
         if isinstance(self.gain, np.ndarray) and self.gain.shape[0] != self.dim:
             dim = self.dim
             self.model, self.dim = None, 0
             raise InputError(f"{self.name}.gain: expected {dim} gains (one per row), "
                              f"got {self.gain.shape[0]}")
+        self._gains = np.broadcast_to(self.gain, (self.dim,)).copy()
         return self
 
     @abstractmethod
-    def compute_error(self, state: State, t: float) -> FloatArray:
-        """Task error ``e = x_d - x`` (dim,) [error_unit]."""
+    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray,
+                                                          FloatArray | None]:
+        """``(J, e, ff)`` at ``(state, t)``.
 
-    @abstractmethod
-    def compute_jacobian(self, state: State, t: float) -> FloatArray:
-        """Jacobian ``J`` (dim, nv) of the regulated quantity: ``x_dot = J zeta``."""
-
-    def compute_feedforward(self, state: State, t: float) -> FloatArray | None:
-        """Feed-forward target rate ``x_dot_d`` (dim,) [rate_unit], or None for zero.
-
-        Called after :meth:`compute_error` at the same ``(state, t)``.
+        ``J`` (dim, nv): Jacobian of the regulated quantity, ``x_dot = J zeta`` (may be a
+        read-only view of the state's arrays); ``e`` (dim,): the error ``x_d - x``
+        [error_unit], a new array (it becomes :attr:`last_error`); ``ff`` (dim,): the
+        feed-forward rate ``x_dot_d`` [rate_unit], or None for zero.
         """
-        return None
 
+    @final  # type: ignore[misc]  # the error tasks' one fill, final below ErrorTask
     def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
              upper: FloatArray) -> None:
-        """Write ``J zeta = x_dot_d + K e`` (equality rows).
-
-        Subclasses may override this with a fused version of the three ``compute_*`` calls
-        (same numbers, fewer temporaries); they finish with :meth:`_set_sides`.
-        """
-        e = self.compute_error(state, t)
-        A[:] = self.compute_jacobian(state, t)
-        self._set_sides(e, self.compute_feedforward(state, t), lower, upper)
-
-    def _set_sides(self, e: FloatArray, ff: Any, lower: FloatArray, upper: FloatArray) -> None:
-        """``lower = upper = K e + ff`` (``ff`` None for no feed-forward); keeps ``e``.
-
-        ``e`` must be a fresh array: it is kept as the task's last error (a step result refers
-        to it).
-        """
-        self.last_error = e
-        np.multiply(self.gain, e, out=lower)
+        """Write ``J zeta = x_dot_d + K e`` (equality rows) into the buffers."""
+        J, e, ff = self.error_rows(state, t)
+        A[:] = J
+        np.multiply(e, self._gains, lower)
         if ff is not None:
             lower += ff
         upper[:] = lower
+        self.last_error = e
 
-    def _set_sides_floats(self, e: list[float], lower: FloatArray, upper: FloatArray,
-                          ff: list[float] | None = None) -> None:
-        """:meth:`_set_sides` for an error (and feed-forward) given as plain floats.
+    @final
+    def evaluate(self, state: State, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(J, lower, upper)`` with ``lower = upper = x_dot_d + K e`` (fresh arrays)."""
+        model = self._require_bound()
+        A = np.empty((self.dim, model.nv))
+        lower = np.empty(self.dim)
+        upper = np.empty(self.dim)
+        self.fill(state, t, A, lower, upper)
+        return A, lower, upper
 
-        ``lower = upper = K e (+ ff)`` entry by entry (the same products and sums as the
-        array version), written with one assignment per side; the kept error is a new array.
-        """
-        gain = self.gain  # per-row gains are checked against dim at bind and update
-        if isinstance(gain, np.ndarray):
-            sides = [k * x for k, x in zip(gain.tolist(), e, strict=False)]
-        else:
-            sides = [gain * x for x in e]
-        if ff is not None:
-            sides = [x + f for x, f in zip(sides, ff, strict=False)]
-        lower[:] = sides
-        upper[:] = lower
-        self.last_error = np.array(e)
+    @final
+    def compute_error(self, state: State, t: float) -> FloatArray:
+        """The error ``e = x_d - x`` (dim,) [error_unit] of :meth:`error_rows`."""
+        return self.error_rows(state, t)[1]
+
+    @final
+    def compute_jacobian(self, state: State, t: float) -> FloatArray:
+        """The Jacobian ``J`` (dim, nv) of :meth:`error_rows`."""
+        return self.error_rows(state, t)[0]
+
+    @final
+    def compute_feedforward(self, state: State, t: float) -> FloatArray | None:
+        """The feed-forward rate ``x_dot_d`` (dim,) [rate_unit] of :meth:`error_rows`, or None."""
+        return self.error_rows(state, t)[2]
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
@@ -319,5 +329,7 @@ class ErrorTask(Task):
                 raise InputError(
                     f"{self.name}.gain: expected {self.dim} gains, got {gain.shape[0]}")
             self.gain = gain
+            if self.model is not None:
+                self._gains = np.broadcast_to(gain, (self.dim,)).copy()
         else:
             super()._apply_update(key, value)

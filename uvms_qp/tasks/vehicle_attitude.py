@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -10,14 +9,7 @@ import numpy as np
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
 from ..model.selection import compact_index
-from ._common import (
-    _TWO_PI,
-    EtaRows,
-    eta_axes,
-    parse_axes,
-    vehicle_pose_jacobian,
-    wrap_angles_in_place,
-)
+from ._common import parse_axes, wrap_angle
 from .task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -63,15 +55,10 @@ class VehicleAttitudeTask(ErrorTask):
                                f"{self.name}.axes")
         self.roll = as_scalar(roll, f"{self.name}.roll")
         self.pitch = as_scalar(pitch, f"{self.name}.pitch")
-        self._idx: Any = np.zeros(0, dtype=int)
-        self._all: list[int] = []
+        self._idx: Any = slice(0, 0)
         self._target = np.zeros(0)
-        self._eta_pos: list[int] = []
-        self._pairs: list[tuple[float, int]] = []
-        self._rows: EtaRows | None = None
 
     def _bind(self, model: Model) -> int:
-        known = eta_axes(model)
         if model.vehicle_kind != "spatial":
             raise InputError(f"{self.name}: model {model.name!r} has no roll/pitch "
                              f"({model.vehicle_kind} vehicle)")
@@ -80,43 +67,20 @@ class VehicleAttitudeTask(ErrorTask):
                 raise InputError(f"{self.name}: model {model.name!r} does not actuate "
                                  f"{_ACTUATOR[a]!r} (actuated: {', '.join(model.actuated)}), so "
                                  f"{a} cannot be a task")
-        self._idx = compact_index([known.index(a) for a in self.axes])
-        self._all = list(range(len(self.axes)))
-        self._target = np.array([self.roll if a == "phi" else self.pitch for a in self.axes])
-        self._eta_pos = [known.index(a) for a in self.axes]
-        self._rows = EtaRows(model, self._eta_pos)
-        self._set_pairs()
+        self._idx = compact_index([model.eta_names.index(a) for a in self.axes])
+        self._set_point()
         return len(self.axes)
 
-    def _set_pairs(self) -> None:
-        """``(set point [rad], index into eta)`` per row, for the plain-float error."""
-        self._pairs = list(zip(self._target.tolist(), self._eta_pos, strict=True))
+    def _set_point(self) -> None:
+        self._target = np.array([self.roll if a == "phi" else self.pitch for a in self.axes])
 
-    def compute_error(self, state: State, t: float) -> FloatArray:
-        """``wrap(angle_d - angle)`` on the selected axes [rad]."""
-        e = self._target - state.eta[self._idx]
-        wrap_angles_in_place(e, self._all)
-        return e
-
-    def compute_jacobian(self, state: State, t: float) -> FloatArray:
-        """Rows of the vehicle-pose Jacobian for roll/pitch."""
-        return vehicle_pose_jacobian(state)[self._idx]
-
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write ``J_eta,S zeta = K wrap(eta_d - eta)_S``.
-
-        The error in plain floats (the operations of :meth:`compute_error` and
-        :func:`~uvms_qp.tasks._common.wrap_angle` per angle); the rows are written from the
-        state's plain-float ``J_eta`` entries.
-        """
-        if not self._fused:
-            super().fill(state, t, A, lower, upper)
-            return
-        eta = state.eta_floats()
-        self._rows.write(state, A)  # type: ignore[union-attr]
-        self._set_sides_floats([(a - eta[i] + math.pi) % _TWO_PI - math.pi
-                                for a, i in self._pairs], lower, upper)
+    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+        """``(J_eta,S, wrap(angle_d - angle)_S, None)`` on roll/pitch [rad]."""
+        idx = self._idx
+        e = self._target - state.eta[idx]
+        for i in range(e.shape[0]):
+            e[i] = wrap_angle(e.item(i))
+        return state.vehicle_pose_jacobian()[idx], e, None
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
@@ -126,8 +90,6 @@ class VehicleAttitudeTask(ErrorTask):
         if key in ("roll", "pitch"):
             setattr(self, key, as_scalar(value, f"{self.name}.{key}"))
             if self.model is not None:
-                self._target = np.array([self.roll if a == "phi" else self.pitch
-                                         for a in self.axes])
-                self._set_pairs()
+                self._set_point()
         else:
             super()._apply_update(key, value)

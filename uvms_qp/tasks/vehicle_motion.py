@@ -82,14 +82,13 @@ class VehicleMotionTask(Task):
         except InputError as exc:
             raise InputError(f"{self.name}.{exc}") from None
         self._A = np.zeros((0, 0))
-        self._zero = np.zeros(0)
 
     def _bind(self, model: Model) -> int:
         if model.n_vehicle == 0:
             raise InputError(f"{self.name}: model {model.name!r} has no actuated vehicle DOF")
         m = model.nv if self.include_arm else model.n_vehicle
         self._A = np.eye(m, model.nv)
-        self._zero = np.zeros(m)
+        self._A.setflags(write=False)
         return m
 
     def _update_row_weights(self) -> None:
@@ -97,16 +96,12 @@ class VehicleMotionTask(Task):
         if model is None:
             return
         if self.include_arm:
-            self._row_weights = self.weight * motion_distribution_weights(model, self.beta,
+            self.row_weights = self.weight * motion_distribution_weights(model, self.beta,
                                                                           self.w_max)
 
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write ``zeta_i = 0`` on the vehicle (and arm) rows."""
-        A[:] = self._A
-        lower[:] = 0.0
-        upper[:] = 0.0
-        self.last_error = None
+    def evaluate(self, state: State, t: float) -> tuple[FloatArray, float, float]:
+        """``zeta_i = 0`` on the vehicle (and arm) rows (no error: ``last_error`` stays None)."""
+        return self._A, 0.0, 0.0
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""

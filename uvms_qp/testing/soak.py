@@ -23,11 +23,13 @@ import time
 import tracemalloc
 from collections import Counter
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
 from ..controller import Controller
 from ..sim.scenario import load_scenario
+from ..tasks import EndEffectorTask
 from .faults import Fault, inject_random
 
 
@@ -120,13 +122,14 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
     rng = np.random.default_rng(seed)
     scenario = load_scenario("bluerov2_demo")
     model, dt = scenario.model, scenario.dt
-    ctrl = Controller(model, scenario.stack, solver=solver, dt=dt, metric=scenario.metric,
+    stack = scenario.build_stack()
+    ctrl = Controller(model, stack, solver=solver, dt=dt, metric=scenario.metric,
                       deadline=deadline)
     # the controller has one path: a wrapped back-end is called exactly where the real one is
     faults = (inject_random(ctrl, fault_rate, fault_rng, sleep=sleep)
               if fault_rate > 0 else None)
-    tool = scenario.task("tool")
-    payload = scenario.task("payload")
+    tool = cast(EndEffectorTask, stack.task("tool"))
+    payload = stack.task("payload")
     lower_q, upper_q = model.joint_lower, model.joint_upper
     q0 = np.array(scenario.q0, dtype=np.float64)
     q = q0.copy()

@@ -18,8 +18,9 @@ import zlib
 import numpy as np
 import pinocchio as pin
 import pytest
-from reference_kinematics import reference_manipulability
+from reference_kinematics import Ref, reference_manipulability, target_frame_jacobian
 
+from uvms_qp.analytic import LIMIT_CLEARANCE, shaping_function
 from uvms_qp.errors import InputError
 from uvms_qp.model import bundled_models, load_model
 from uvms_qp.tasks import (
@@ -34,8 +35,6 @@ from uvms_qp.tasks import (
     VehicleAttitudeTask,
     VehicleMotionTask,
 )
-from uvms_qp.tasks.joint_limit import LIMIT_CLEARANCE
-from uvms_qp.tasks.manipulability import shaping_function
 
 MODELS = {name: load_model(name) for name in bundled_models()}
 TICKS = 6
@@ -46,69 +45,6 @@ RTOL = 1e-10
 #: of random configurations); a wrong formula is off by O(1)
 RTOL_MANIPULABILITY = 1e-6
 _TWIST = ("x", "y", "z", "rx", "ry", "rz")
-_PIN_VELOCITY = {"spatial": "uvwpqr", "planar": "uvr", "fixed": ""}
-
-
-# ------------------------------------------------------------------------ reference kinematics
-class Ref:
-    """Kinematics of one configuration straight from Pinocchio (fresh Data) and numpy."""
-
-    def __init__(self, model, q):
-        self.model = model
-        pm = model.pin_model
-        data = pm.createData()
-        pin.computeJointJacobians(pm, data, q)
-        pin.updateFramePlacements(pm, data)
-        self.pm, self.data, self.q = pm, data, q
-        order = _PIN_VELOCITY[model.vehicle_kind]
-        nvp = len(order)
-        self.cols = [order.index(a) for a in model.actuated] + [
-            nvp + j for j in range(model.n_joints)]
-        self.joints = q[model.nq_vehicle:]
-        self.eta = self._eta()
-
-    def pose(self, frame):
-        return self.data.oMf[self.model.frame_id(frame)].homogeneous.copy()
-
-    def jacobian(self, frame):
-        J = pin.getFrameJacobian(self.pm, self.data, self.model.frame_id(frame),
-                                 pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        return J[:, self.cols]
-
-    def arm_jacobian(self, frame="tool"):
-        """Twist of ``frame`` over the joint rates, vehicle still, in arm-base axes."""
-        R = self.pose("arm_base")[:3, :3]
-        J = self.jacobian(frame)[:, self.model.n_vehicle:]
-        return np.vstack([R.T @ J[:3], R.T @ J[3:]])
-
-    def _eta(self):
-        kind, q = self.model.vehicle_kind, self.q
-        if kind == "spatial":
-            R = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
-            return np.concatenate([q[:3], pin.rpy.matrixToRpy(R)])
-        if kind == "planar":
-            return np.array([q[0], q[1], math.atan2(q[3], q[2])])
-        return np.zeros(0)
-
-    def eta_jacobian(self):
-        """Fossen's ``J_eta`` over zeta (actuated vehicle columns; joint columns zero)."""
-        m, eta = self.model, self.eta
-        if m.vehicle_kind == "fixed":
-            return np.zeros((0, m.nv))
-        if m.vehicle_kind == "planar":
-            c, s = math.cos(eta[2]), math.sin(eta[2])
-            full = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-        else:
-            phi, theta, psi = eta[3:]
-            sp, cp, ct, tt = math.sin(phi), math.cos(phi), math.cos(theta), math.tan(theta)
-            T = np.array([[1.0, sp * tt, cp * tt], [0.0, cp, -sp], [0.0, sp / ct, cp / ct]])
-            full = np.zeros((6, 6))
-            full[:3, :3] = pin.rpy.rpyToMatrix(phi, theta, psi)
-            full[3:, 3:] = T
-        order = _PIN_VELOCITY[m.vehicle_kind]
-        J = np.zeros((m.eta_size, m.nv))
-        J[:, : m.n_vehicle] = full[:, [order.index(a) for a in m.actuated]]
-        return J
 
 
 def wrap(a):
@@ -150,27 +86,45 @@ class Line:
 
 
 def ref_end_effector(task, ref, t, memory):
-    traj = task._trajectory
-    p_d, v_d, R_d, w_d = task._p_d, np.zeros(3), task._R_d, np.zeros(3)
-    if traj is not None:
-        s = traj.sample(t)
-        p_d, v_d = s.position, s.velocity
+    """Rows of the frame relative to its target, the target fixed in ``task.reference``."""
+    model = ref.model
+    zero = np.zeros(3)
+    v_l = w_l = zero
+    if task.hold is not None:  # the frame's pose in the reference frame at the first tick
+        T_l = memory.setdefault("hold", np.linalg.inv(ref.pose(task.reference))
+                                @ ref.pose(task.frame))
+        p_l, R_l = T_l[:3, 3], T_l[:3, :3]
+    elif task._trajectory is not None:
+        s = task._trajectory.sample(t)
+        p_l, v_l = s.position, s.velocity
+        R_l = task._R_d
         if s.rotation is not None:
-            R_d, w_d = s.rotation, s.angular_velocity
+            R_l, w_l = s.rotation, s.angular_velocity
+    else:
+        p_l, R_l = task.target(t)
+    T_l = np.eye(4)
+    if p_l is not None:
+        T_l[:3, 3] = p_l
+    if R_l is not None:
+        T_l[:3, :3] = R_l
+    if task.reference == "world":
+        T_d, J_d, R_r = T_l, np.zeros((6, model.nv)), np.eye(3)
+    else:
+        T_d, J_d = target_frame_jacobian(model, ref.q, task.reference, T_l)
+        R_r = ref.pose(task.reference)[:3, :3]
     J6 = ref.jacobian(task.frame)
     T = ref.pose(task.frame)
     e = np.zeros(6)
     ff = np.zeros(6)
-    A = J6.copy()
-    if task.mode != "orientation":
-        e[:3] = p_d - T[:3, 3]
-        ff[:3] = v_d
+    A = J6 - J_d
+    e[:3] = T_d[:3, 3] - T[:3, 3]
+    ff[:3] = R_r @ v_l
     if task.mode != "position":
-        R_e = R_d @ T[:3, :3].T
+        R_e = T_d[:3, :3] @ T[:3, :3].T
         Jl = pin.Jlog3(R_e)
         e[3:] = pin.log3(R_e)
-        ff[3:] = Jl.T @ w_d
-        A[3:] = Jl @ J6[3:]
+        ff[3:] = Jl.T @ (R_r @ w_l)
+        A[3:] = Jl @ J6[3:] - Jl.T @ J_d[3:]
     sel = [_TWIST.index(a) for a in task.axes]
     return A[sel], np.multiply(task.gain, e[sel]) + ff[sel], None
 
@@ -178,7 +132,13 @@ def ref_end_effector(task, ref, t, memory):
 def ref_station_keeping(task, ref, t, memory):
     idx = [eta_names(ref.model).index(a) for a in task.axes]
     eta = ref.eta[idx]
-    if task._target_arg is not None:
+    if task._pose_arg is not None:  # a world pose of the vehicle
+        T = task._pose_arg
+        pose_eta = np.concatenate((T[:3, 3], pin.rpy.matrixToRpy(T[:3, :3])))
+        if ref.model.vehicle_kind == "planar":
+            pose_eta = np.array([T[0, 3], T[1, 3], math.atan2(T[1, 0], T[0, 0])])
+        target = pose_eta[idx]
+    elif task._target_arg is not None:
         target = np.asarray(task._target_arg, float)
     elif task.hold == "current":
         target = eta
@@ -310,6 +270,19 @@ CASES = {
         mode="pose", trajectory=Line(P, [0.1, 0.0, 0.2], spin=[0.1, 0.0, -0.3])),
     "ee_pose_axes": lambda m: EndEffectorTask(mode="pose", axes=["y", "rz", "x"], position=P,
                                               rotation=[0.3, -0.2, 1.0], gain=[1.0, 2.0, 3.0]),
+    "ee_se3": lambda m: EndEffectorTask(mode="pose", target=pin.SE3(
+        pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array(P))),
+    "ee_hold": lambda m: EndEffectorTask(mode="pose", hold="activation", gain=1.5),
+    "ee_vehicle_position": lambda m: EndEffectorTask(reference="vehicle", position=[0.5, 0.0, 0.3],
+                                                     gain=2.0),
+    "ee_vehicle_pose": lambda m: EndEffectorTask(
+        mode="pose", reference="vehicle", target={"xyz": [0.6, 0.1, 0.2], "rpy": [0.2, 0, 1]}),
+    "ee_arm_base_traj": lambda m: EndEffectorTask(
+        mode="pose", reference="arm_base", rotation=[0.0, 0.1, 0.2],
+        trajectory=Line(P, [0.1, 0.0, 0.2], spin=[0.1, 0.0, -0.3])),
+    "ee_link_axes": lambda m: EndEffectorTask(mode="pose", reference=m.frames[4],
+                                              axes=["x", "rz"], target=np.eye(4)),
+    "ee_vehicle_hold": lambda m: EndEffectorTask(reference="vehicle", hold="activation"),
     "manip_ascend": lambda m: ManipulabilityTask(mode="ascend", gain=0.5),
     "manip_floor": lambda m: ManipulabilityTask(mode="floor", minimum=0.002, gain=2.0),
     "manip_shaping": lambda m: ManipulabilityTask(mode="shaping", threshold=0.5, gain=0.7),
@@ -323,12 +296,17 @@ CASES = {
     "payload_normalized": lambda m: PayloadMomentTask(force=10.0, normalize=True),
     "payload_bound": lambda m: PayloadMomentTask(mode="bound", force=5.0, maximum=0.3),
     "posture": lambda m: PostureTask(gain=0.2),
+    "posture_reversed": lambda m: PostureTask(joints=list(reversed(m.joint_names)), gain=0.4),
+    "jl_reversed": lambda m: JointLimitTask(mode="margin", joints=list(reversed(m.joint_names)),
+                                            margin=0.05),
     "posture_subset": lambda m: PostureTask(
         reference="middle", joints=[m.joint_names[-1], m.joint_names[0]], gain=[0.1, 0.3]),
     "station_hold": lambda m: StationKeepingTask(gain=1.0),
     "station_current": lambda m: StationKeepingTask(hold="current"),
     "station_target": lambda m: StationKeepingTask(axes=["psi", "x"], target=[3.1, 0.2],
                                                    gain=[1.0, 2.0]),
+    "station_pose": lambda m: StationKeepingTask(pose=pin.SE3(pin.rpy.rpyToMatrix(0, 0, 2.0),
+                                                              np.array([1.0, -0.5, 0.3]))),
     "current_alignment": lambda m: CurrentAlignmentTask(heading=0.78, gain=0.5),
     "current_direction": lambda m: CurrentAlignmentTask(direction=[1.0, -2.0], offset=3.0),
     "attitude": lambda m: VehicleAttitudeTask(gain=[1.0, 2.0]),
@@ -450,63 +428,67 @@ def test_the_controller_reports_the_bound_units():
     assert result.task_residuals["station_keeping"][1] == "rad/s"
 
 
-# ------------------------------------------------------------------- per-state plain floats
-@pytest.mark.parametrize("model_name", sorted(MODELS))
-def test_state_plain_float_views_equal_the_arrays(model_name):
-    model = MODELS[model_name]
-    for q in _configurations(model, seed=3):
-        state = model.state(q)
-        ref = Ref(model, q)
-        assert state.eta_floats() == state.eta.tolist()
-        np.testing.assert_allclose(state.eta, ref.eta, rtol=0, atol=1e-12)
-        assert state.joint_floats() == state.joints.tolist()
-        full = np.array(state.eta_jacobian_values()).reshape(model.eta_size, -1
-                                                             if model.eta_size else 0)
-        order = _PIN_VELOCITY[model.vehicle_kind]
-        J = ref.eta_jacobian()[:, : model.n_vehicle]
-        np.testing.assert_allclose(full[:, [order.index(a) for a in model.actuated]], J,
-                                   rtol=0, atol=1e-12)
-        np.testing.assert_allclose(state.vehicle_pose_jacobian(), ref.eta_jacobian(), rtol=0,
-                                   atol=1e-12)
-        T_b = ref.pose("arm_base")
-        for frame in model.frames:
-            p = T_b[:3, :3].T @ (ref.pose(frame)[:3, 3] - T_b[:3, 3])
-            np.testing.assert_allclose(state.arm_position_floats(frame), p, rtol=0, atol=1e-12)
-
-
-def test_state_keeps_derived_values_per_state():
+# ----------------------------------------------------------------------------- the contract
+@pytest.mark.parametrize("case", ["ee_pose", "ee_vehicle_pose", "station_hold", "attitude",
+                                  "current_alignment", "posture"])
+def test_compute_methods_are_views_of_the_one_evaluation(case):
+    """``compute_error`` / ``_jacobian`` / ``_feedforward`` are the parts of ``error_rows``."""
     model = MODELS["bluerov2_heavy_alpha5"]
-    s1, s2 = (model.state(q) for q in _configurations(model, seed=4)[:2])
-    assert s1.derived(("x", 1)) is None
-    value = object()
-    assert s1.store(("x", 1), value) is value
-    assert s1.derived(("x", 1)) is value
-    assert s2.derived(("x", 1)) is None  # a new state starts empty
-
-
-@pytest.mark.parametrize("own_fill", [False, True])
-@pytest.mark.parametrize("case", ["ee_position", "ee_pose", "station_hold", "current_alignment",
-                                  "attitude", "posture"])
-def test_a_subclass_overriding_compute_error_is_honoured_by_fill(case, own_fill):
-    model = MODELS["bluerov2_heavy_alpha5"]
-    base = type(CASES[case](model))
-
-    class Shifted(base):  # type: ignore[misc, valid-type]
-        def compute_error(self, state, t):
-            return super().compute_error(state, t) + 1.0
-
-    if own_fill:  # a subclass that also wraps fill still gets its own error
-        class Wrapped(Shifted):
-            def fill(self, state, t, A, lower, upper):
-                super().fill(state, t, A, lower, upper)
-
-        Shifted = Wrapped
-
-    task = CASES[case](model)
-    task.__class__ = Shifted
-    task.bind(model)
+    task = CASES[case](model).bind(model)
     state = model.state(_configurations(model, seed=6)[0])
-    rows = task.rows(state, 0.0)
-    e = task.compute_error(state, 0.0)
-    ff = task.compute_feedforward(state, 0.0)
-    np.testing.assert_allclose(rows.lower, np.multiply(task.gain, e) + (0.0 if ff is None else ff))
+    rows = task.rows(state, 0.3)
+    e = task.compute_error(state, 0.3)
+    ff = task.compute_feedforward(state, 0.3)
+    np.testing.assert_array_equal(task.compute_jacobian(state, 0.3), rows.A)
+    np.testing.assert_array_equal(rows.lower, np.multiply(task.gain, e) + (0.0 if ff is None
+                                                                           else ff))
+    np.testing.assert_array_equal(task.last_error, e)
+    J, lower, upper = task.evaluate(state, 0.3)
+    np.testing.assert_array_equal(J, rows.A)
+    np.testing.assert_array_equal(lower, rows.lower)
+    np.testing.assert_array_equal(upper, rows.upper)
+
+
+@pytest.mark.parametrize("method", ["fill", "rows", "evaluate", "compute_error"])
+def test_a_task_class_writes_only_its_one_evaluation(method):
+    """Overriding a method the base classes define from ``error_rows`` is refused at once."""
+    with pytest.raises(TypeError, match=f"overrides {method}"):
+        type("Shifted", (PostureTask,), {method: lambda self, *args: None})
+
+
+def test_a_set_based_task_may_not_override_fill():
+    with pytest.raises(TypeError, match="overrides fill"):
+        type("Direct", (JointLimitTask,), {"fill": lambda self, *args: None})
+
+
+def test_the_kept_error_is_a_new_array_every_tick():
+    """A step result keeps a reference to the task error: the next tick must not overwrite it."""
+    model = MODELS["bluerov2_heavy_alpha5"]
+    for make in (CASES["ee_position"], CASES["station_hold"], CASES["posture"],
+                 CASES["manip_floor"], CASES["jl_margin"], CASES["payload_reduce"]):
+        task = make(model).bind(model)
+        s1, s2 = (model.state(q) for q in _configurations(model, seed=2)[:2])
+        task.rows(s1, 0.0)
+        e1 = task.last_error
+        kept = e1.copy()
+        task.rows(s2, 0.1)
+        assert task.last_error is not e1
+        np.testing.assert_array_equal(e1, kept)
+
+
+def test_vehicle_attitude_set_point_update_reaches_the_rows():
+    model = MODELS["bluerov2_heavy_alpha5"]
+    task = VehicleAttitudeTask(roll=0.0, pitch=0.0, gain=[1.0, 2.0]).bind(model)
+    task.update(roll=-3.0, pitch=3.1)
+    for q in _configurations(model, seed=15):
+        state = model.state(q)
+        phi, theta = state.eta[3], state.eta[4]
+        want = np.array([wrap(-3.0 - phi), wrap(3.1 - theta)]) * np.array([1.0, 2.0])
+        np.testing.assert_allclose(task.rows(state).lower, want, rtol=0, atol=1e-15)
+
+
+def test_current_alignment_without_heading_names_the_task():
+    model = MODELS["bluerov2_heavy_alpha5"]
+    task = CurrentAlignmentTask(name="yaw").bind(model)
+    with pytest.raises(InputError, match="yaw"):
+        task.rows(model.state(model.home()))

@@ -1,0 +1,1 @@
+"""Slow, obviously right references for tests (never imported by the package)."""
