@@ -14,8 +14,9 @@ each level's weighted ``r_k^2 = sum_i w_i s_i^2``. The decision:
 * a claimed success whose hard violation exceeds ``hard_tol * max(1, max |finite hard side|)``:
   ``backend_error`` (the message names the bound or row);
 * otherwise ``optimal`` when every ``r_k <= level_tol * max(1, max |finite side of level k|)``,
-  else ``level_infeasible`` at the first unmet level; a certificate, when given, is asked about
-  each unmet level and a level it cannot prove optimal makes the answer ``unproven``.
+  else ``level_infeasible`` at the first unmet level; a certificate, when given, is asked once
+  about an answer with an unmet level, and a level it cannot prove optimal makes the answer
+  ``unproven``.
 
 :func:`hard_violation` is the one measure of "how far is x outside the hard set" on plain arrays,
 for callers that hold the box and rows themselves (simulation logs, benchmarks).
@@ -33,8 +34,10 @@ from .._validation import FloatArray
 from .problem import Problem
 from .result import OK_STATUSES, HierarchyResult, Status
 
-#: ``certify(problem, x, slacks, k) -> bool``: True when level ``k`` is proven optimal at ``x``.
-Certifier = Callable[[Problem, FloatArray, FloatArray, int], bool]
+#: ``certify(problem, x) -> k``: the first level of ``x`` that is neither met nor proven optimal,
+#: or None when every level is (asked only when a level is unmet; e.g.
+#: ``uvms_qp.hqp.certificate.certify(*problem_arrays(problem), x).first_failure``).
+Certifier = Callable[[Problem, FloatArray], "int | None"]
 
 _OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
 _SQRT = math.sqrt
@@ -134,7 +137,8 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
         hard_tol: Relative tolerance on the hard box and rows.
         solve_time: Wall time of the solve [s].
         measured: :func:`measure` of ``x`` when the caller has it already.
-        certify: Optimality certificate asked about every unmet level (None: not asked).
+        certify: Optimality certificate asked about an answer with an unmet level (None: not
+            asked).
 
     Returns:
         The result; ``x`` is always finite.
@@ -180,14 +184,13 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             spans = problem.spans
             for k, r in enumerate(residuals):
                 if r > level_tol and r > level_tol * problem.scale(*spans[k]):
-                    if infeasible is None:
-                        infeasible, status = k, _LEVEL_INFEASIBLE
-                    if certify is None:
-                        break
-                    if not certify(problem, x, s, k):
-                        status = Status.UNPROVEN
-                        message = (message + "; " if message else "") + (
-                            f"level {k} is not proven optimal")
-                        break
+                    infeasible, status = k, _LEVEL_INFEASIBLE
+                    break
+            if infeasible is not None and certify is not None:
+                failed = certify(problem, x)
+                if failed is not None:
+                    status = Status.UNPROVEN
+                    message = (message + "; " if message else "") + (
+                        f"level {failed} is not proven optimal")
     return HierarchyResult(x, status, solver, residuals, infeasible, hv, solve_time, message,
                            info or {}, s, problem.spans, problem.sides[:, :problem.n].copy())

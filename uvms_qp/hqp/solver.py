@@ -50,7 +50,7 @@ class HierarchySolver:
 
     Attributes:
         backend: The back-end object (:class:`~uvms_qp.hqp.backends.Backend`).
-        certify: Optimality certificate asked about every unmet level
+        certify: Optimality certificate asked about every answer with an unmet level
             (:data:`~uvms_qp.hqp.measure.Certifier`); None: unmet levels are not questioned.
         saturate: Clip every claimed answer into the box before measuring it, the amount in
             ``info["clipped"]`` (for a closed form that cannot enforce the box, whose command is
