@@ -196,20 +196,21 @@ class StackAssembler:
         Returns normally when every entry is legitimate (the reductions of
         :func:`~uvms_qp.hqp.validate.finite_ok` overflowed on large finite values).
         """
-        for kind, owner, A, lo, hi in (
-                *[("task", task, A, lo, hi) for task, A, lo, hi in self._slots],
-                *[("constraint", c, A, lo, hi) for c, A, lo, hi in self._row_slots]):
+        named: list[tuple[str, FloatArray, FloatArray, FloatArray]] = [
+            *[(f"task {task.name!r}", A, lo, hi) for task, A, lo, hi in self._slots],
+            *[(f"constraint {c.name!r}", A, lo, hi) for c, A, lo, hi in self._row_slots]]
+        for who, A, lo, hi in named:
             if not np.isfinite(A).all():
-                raise NonFiniteError(f"{kind} {owner.name!r} produced non-finite rows")
+                raise NonFiniteError(f"{who} produced non-finite rows")
             if np.isnan(lo).any() or np.isposinf(lo).any() or np.isnan(hi).any() or (
                     np.isneginf(hi).any()):
                 raise NonFiniteError(
-                    f"{kind} {owner.name!r} produced a non-finite target side (NaN, a +inf lower "
-                    "or a -inf upper side; e.g. a gain times an error that overflowed)")
+                    f"{who} produced a non-finite target side (NaN, a +inf lower or a -inf upper "
+                    "side; e.g. a gain times an error that overflowed)")
             if (lo > hi).any():
                 i = int(np.flatnonzero(lo > hi)[0])
-                raise BoundsError(f"{kind} {owner.name!r} produced row {i} with lower side "
-                                  f"{lo[i]:.6g} > upper side {hi[i]:.6g}")
+                raise BoundsError(f"{who} produced row {i} with lower side {lo[i]:.6g} > upper "
+                                  f"side {hi[i]:.6g}")
 
     def _raise_empty_box(self, state: State | None) -> None:
         lower, upper = self._box if state is not None else self._static_box

@@ -26,6 +26,7 @@ The papers' schemes (:mod:`uvms_qp.schemes`) implement the same :class:`Scheme` 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
@@ -171,6 +172,7 @@ class NullspaceScheme(_StackScheme):
         super().__init__(assembler, safe, assembler.problem)
 
 
-#: The controller's schemes by name.
-SCHEMES: dict[str, type[_StackScheme]] = {
+#: The controller's schemes by name (each built from the assembler and the keyword arguments
+#: ``solver``, ``options``, ``deadline``, ``strict``, ``priority_ratio``).
+SCHEMES: dict[str, Callable[..., _StackScheme]] = {
     "hqp": HqpScheme, "weighted": WeightedScheme, "nullspace": NullspaceScheme}

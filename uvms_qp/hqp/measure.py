@@ -91,6 +91,8 @@ def hard_violation(x: FloatArray, lower: FloatArray, upper: FloatArray,
     """
     v = _largest(x - np.minimum(np.maximum(x, lower), upper))[0]
     if A is not None and A.shape[0]:
+        if lo is None or hi is None:
+            raise ValueError("hard_violation: rows A need their sides lo and hi")
         z = A @ x
         v = max(v, _largest(z - np.minimum(np.maximum(z, lo), hi))[0])
     return v

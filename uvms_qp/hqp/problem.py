@@ -145,7 +145,7 @@ class Problem:
         return Rows(self.A[n:h], self.lo[n:h], self.hi[n:h])
 
     def level(self, k: int) -> Rows:
-        """The rows of level ``k`` as :class:`~uvms_qp.rows.Rows` (views, weights included)."""
+        """The rows of level ``k`` as :class:`~uvms_qp.rows.Rows` (views, weights always set)."""
         a, b = self.spans[k]
         h = self.head
         return Rows(self.A[a:b], self.lo[a:b], self.hi[a:b], self.w[a - h:b - h])

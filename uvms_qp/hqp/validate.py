@@ -199,10 +199,10 @@ class Validator:
         """``(-inf, +inf, ones)`` vectors of length n (shared, never written)."""
         got = self._last
         if got[2].shape[0] != n:
-            got = self._constant.get(n)
-            if got is None:
-                got = self._constant[n] = (np.full(n, -np.inf), np.full(n, np.inf), np.ones(n))
-            self._last = got
+            kept = self._constant.get(n)
+            if kept is None:
+                kept = self._constant[n] = (np.full(n, -np.inf), np.full(n, np.inf), np.ones(n))
+            self._last = got = kept
         return got
 
     @staticmethod
@@ -227,39 +227,41 @@ class Validator:
         """
         given = n
         fast = _fast_parse(levels, hard)
-        lo_box = hi_box = None
+        lo_box: FloatArray | None = None
+        hi_box: FloatArray | None = None
         if fast is not None and fast[1] > 0:
-            parsed, n, mh, weighted = fast
-            lo_inf, hi_inf, _ = self._constants(n)
-            lo_box, hi_box = self._box(lower, n, lo_inf), self._box(upper, n, hi_inf)
+            parsed, cols, mh, weighted = fast
+            lo_inf, hi_inf, _ = self._constants(cols)
+            lo_box, hi_box = self._box(lower, cols, lo_inf), self._box(upper, cols, hi_inf)
         checked = lo_box is None or hi_box is None
-        if checked:
+        if lo_box is None or hi_box is None:
             parsed, lo_box, hi_box = _one_by_one(levels, lower, upper, hard, given)
-            n = lo_box.shape[0]
             mh = sum(A.shape[0] for A in parsed[0][:parsed[4]])
             weighted = any(w is not None for w in parsed[3])
+        width = int(lo_box.shape[0])
         As, los, his, ws, n_hard, sizes = parsed
         problem = self._problem
-        if problem is None or problem.n != n or problem.mh != mh or problem.sizes != tuple(sizes):
-            problem = self._problem = Problem(n, mh, sizes)
+        if problem is None or problem.n != width or problem.mh != mh or (
+                problem.sizes != tuple(sizes)):
+            problem = self._problem = Problem(width, mh, sizes)
             self._flat = problem.sides.reshape(-1)
             self._ones = True
         if As:
-            np.concatenate(As, out=problem.A[n:])
+            np.concatenate(As, out=problem.A[width:])
         np.concatenate((lo_box, *los, hi_box, *his), out=self._flat)
         if not checked and not sides_and_rows_ok(problem):
-            _one_by_one(levels, lower, upper, hard, n)  # raises, or the sums only overflowed
+            _one_by_one(levels, lower, upper, hard, width)  # raises, or the sums overflowed
         if weighted:
             w = np.concatenate([w if w is not None else np.ones(A.shape[0])
                                 for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
             if not (math.isfinite(float(w.sum())) and _MIN(w) > 0.0):
-                _one_by_one(levels, lower, upper, hard, n)  # names the rows at fault
+                _one_by_one(levels, lower, upper, hard, width)  # names the rows at fault
             problem.set_weights(w)
             self._ones = False
         elif not self._ones:
             problem.set_weights(None)
             self._ones = True
-        problem.W = self._constants(n)[2] if W is None else W
+        problem.W = self._constants(width)[2] if W is None else W
         return problem
 
 

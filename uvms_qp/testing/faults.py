@@ -172,19 +172,11 @@ class FaultyBinding:
         self._injector = injector
         self._sides: tuple[np.ndarray, np.ndarray] | None = None
         self.x = inner.x
+        self.solve_time = 0.0
+        self.iterations = 0
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._inner, name)
-
-    @property
-    def solve_time(self) -> float:
-        """The wrapped binding's solve time [s]."""
-        return float(self._inner.solve_time)
-
-    @property
-    def iterations(self) -> int:
-        """The wrapped binding's iterations."""
-        return int(self._inner.iterations)
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -206,14 +198,13 @@ class FaultyBinding:
     def solve(self) -> int:
         """DAQP's solve, or the scheduled fault (a claimed success, or flag -4 for a wild x)."""
         injector = self._injector
-        if not injector.fires():
+        fired = injector.fires()
+        if not fired or injector.fault is Fault.SLEEP:
             flag = int(self._inner.solve())
+            if fired:
+                injector.sleeper(injector.sleep)
             self.x = self._inner.x
-            return flag
-        if injector.fault is Fault.SLEEP:
-            flag = int(self._inner.solve())
-            injector.sleeper(injector.sleep)
-            self.x = self._inner.x
+            self.solve_time, self.iterations = self._inner.solve_time, self._inner.iterations
             return flag
         lower, upper = self._sides  # type: ignore[misc]
         n = len(self._inner.x)

@@ -64,7 +64,7 @@ def nullspace_solve(problem: Problem, rcond: float = 1e-10, atol: float = 0.0) -
     for level in problem.levels:
         if level.m == 0:
             continue
-        d = np.sqrt(level.weights)
+        d = np.sqrt(level.weights if level.weights is not None else np.ones(level.m))
         At = (d[:, None] * level.A) * w_isqrt[None, :]
         M = At @ P
         U, sv, Vt = np.linalg.svd(M, full_matrices=False)
