@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
+from ..hqp import hard_violation
 from ..safety import STAGES
 from ..stack import Stack
 from .probes import Probes
@@ -181,30 +182,24 @@ def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: F
                           lower: FloatArray, upper: FloatArray) -> float:
     """Largest violation of the constraints' hard rows by ``zeta``; fills the box into lower/upper.
 
-    The box of several constraints is their intersection.
+    The box of several constraints is their intersection; the violation is
+    :func:`uvms_qp.hqp.hard_violation` of the box and rows rebuilt from the constraint objects.
     """
     lower.fill(-np.inf)
     upper.fill(np.inf)
-    worst = 0.0
+    rows = []
     for constraint in constraints:
-        box = getattr(constraint, "box", None)
-        if box is not None:
-            bounds = box(state, dt)
-            if bounds is not None:
-                lo, hi = bounds
-                if lo is not None:
-                    np.maximum(lower, lo, out=lower)
-                if hi is not None:
-                    np.minimum(upper, hi, out=upper)
-        rows_method = getattr(constraint, "rows", None)
-        if rows_method is not None:
-            rows = rows_method(state, dt)
-            if rows is not None and rows.m:
-                worst = max(worst, float(rows.violation(zeta).max()))
-    box_violation = np.maximum(lower - zeta, 0.0) + np.maximum(zeta - upper, 0.0)
-    if box_violation.size:
-        worst = max(worst, float(box_violation.max()))
-    return worst
+        if constraint.has_box:
+            lo, hi = constraint.box(state, dt)
+            np.maximum(lower, lo, out=lower)
+            np.minimum(upper, hi, out=upper)
+        if constraint.rows_dim:
+            rows.append(constraint.rows(state, dt))
+    if not rows:
+        return hard_violation(zeta, lower, upper)
+    return hard_violation(zeta, lower, upper, np.vstack([r.A for r in rows]),
+                          np.concatenate([r.lower for r in rows]),
+                          np.concatenate([r.upper for r in rows]))
 
 
 class _Progress:
