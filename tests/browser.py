@@ -5,10 +5,15 @@ Chromium (Debian's ``chromium``) is driven through the DevTools protocol over a 
 JSON messages ended by a NUL byte), so no websocket client and no network port are needed. Every
 host name resolves to nothing (``--host-resolver-rules``): a page that tries to fetch anything
 logs a network error.
+
+Run as a script, it takes the screenshots of the 3-D view in ``docs/figures/``:
+``python tests/browser.py out/walk.html docs/figures/own_robot_walk.png --frame 149`` shows
+animation frame 149 of the page written by ``uvms-qp run ... --view out/walk.html``.
 """
 
 from __future__ import annotations
 
+import argparse
 import base64
 import contextlib
 import json
@@ -225,3 +230,33 @@ def load_page(path: Path, *, width: int = 1000, height: int = 750, ready: str = 
         os.close(commands_w)
         os.close(answers_r)
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def view_screenshot(page: Path, png: Path, frame: int, *, width: int = 1000,
+                    height: int = 700) -> list[str]:
+    """Write a screenshot of frame ``frame`` of a 3-D view page; return the console errors."""
+    div = "document.getElementById('uvms-qp-view')"
+    still = "{frame: {duration: 0, redraw: true}, mode: 'immediate'}"
+    report = load_page(
+        page, width=width, height=height, settle=0.5,
+        ready=f"{div} && {div}.querySelector('.gl-container canvas') !== null",
+        steps=(f"Plotly.animate({div}, ['{frame}'], {still}).then(() => null)",),
+    )
+    png.write_bytes(report.shots[0])
+    return report.errors
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description="screenshot of a frame of a 3-D view page")
+    parser.add_argument("page", type=Path, help="HTML file written by uvms-qp run --view")
+    parser.add_argument("png", type=Path, help="PNG file to write")
+    parser.add_argument("--frame", type=int, default=0, help="animation frame to show")
+    args = parser.parse_args()
+    errors = view_screenshot(args.page, args.png, args.frame)
+    for error in errors:
+        print(f"console error: {error}")
+    return 1 if errors else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -20,11 +20,14 @@ from uvms_qp.cli import main
 from uvms_qp.errors import ConfigError, InputError, ModelError, UnknownModelError
 from uvms_qp.model import Vehicle, bundled_models, load_model, model_names
 from uvms_qp.model.registry import register_model, unregister_model
+from uvms_qp.sim.comparison import compare
 from uvms_qp.sim.model_file import read_model_file, register_model_file
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
+from uvms_qp.sim.view import plotly_available
 
 DATA = Path(__file__).parent / "data"
+WALK = Path(__file__).parents[1] / "examples" / "own_robot" / "walk.toml"  # docs/own_robot.md
 URDF = DATA / "three_joint_arm.urdf"
 MODEL_FILE = DATA / "holdout_rov.toml"
 SCENARIO = DATA / "holdout_reach.toml"
@@ -271,6 +274,34 @@ def test_a_whole_holdout_run_tracks_its_path():
     metrics = result.metrics()
     assert metrics["ee_error_max"] < 5e-3 and metrics["bound_violation_max"] <= 1e-9
     assert metrics["vehicle_displacement_max"] > 0.2  # the path leaves the arm's reach
+
+
+def test_own_robot_walk_runs_compares_and_views_from_the_command_line(tmp_path, capsys):
+    scenario = load_scenario(WALK)
+    assert scenario.model.name == "five_function_arm" and "five_function_arm" not in model_names()
+    assert (scenario.model.n_vehicle, scenario.model.n_joints) == (4, 5)
+    short = ["--duration", "1.0"]
+    view = ["--view", str(tmp_path / "walk.html")] if plotly_available() else []
+    assert main(["run", str(WALK), "--out", str(tmp_path / "run"), *short, *view]) == 0
+    assert main(["compare", str(WALK), "--out", str(tmp_path / "cmp"), *short]) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    assert (tmp_path / "run" / "results.json").is_file()
+    assert (tmp_path / "run" / "rates.png").is_file()
+    assert (tmp_path / "cmp" / "wang_pseudoinverse" / "results.json").is_file()
+    assert (tmp_path / "cmp" / "configurations.png").is_file()
+    assert not view or (tmp_path / "walk.html").stat().st_size > 1e6  # plotly.js is inside
+
+
+def test_own_robot_walk_does_what_its_page_says():
+    comparison = compare(load_scenario(WALK))
+    hqp, pinv = (comparison.run(name).metrics for name in ("hqp", "wang_pseudoinverse"))
+    assert hqp["ee_error_max"] < 1e-3 and pinv["ee_error_max"] < 1e-3
+    assert 0.6 < hqp["vehicle_displacement_max"] < 0.9  # the path leaves the arm's reach
+    assert hqp["vehicle_speed_max"] < 0.16
+    assert hqp["min_manipulability"] >= 0.03 - 1e-6  # the floor holds
+    assert hqp["joint_limit_violation_max"] == 0 and hqp["bound_violation_max"] <= 1e-9
+    assert pinv["min_manipulability"] > 0.03
+    assert pinv["vehicle_displacement_max"] > hqp["vehicle_displacement_max"]
 
 
 def test_vehicle_table_is_a_vehicle():
