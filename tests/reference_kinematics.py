@@ -13,7 +13,7 @@ _PIN_VELOCITY = {"spatial": "uvwpqr", "planar": "uvr", "fixed": ""}
 def reference_manipulability(J6, rows):
     """``w = sqrt(det(J_S J_S^T))`` and ``dw/dq_i = w trace(dJ_S/dq_i J_S^+)``.
 
-    ``000_7b5f597fe4e36aa4.txt``, Eq. (18)-(19), with the columns' derivatives of a serial arm's
+    Soylu et al. (2007), Eq. (18)-(19), with the columns' derivatives of a serial arm's
     twist Jacobian ``J6 = [V; W]`` (arm-base axes): joint ``i`` moves the columns after it.
 
     Args:

@@ -126,6 +126,33 @@ def _run_toml(block: Block, cwd: Path) -> None:
                     f"first line; anything else is marked {FRAGMENT}")
 
 
+def _anchors(page: Path) -> set[str]:
+    """GitHub's anchors of a page's headings."""
+    headings = re.findall(r"^#+ (.+)$", page.read_text(), flags=re.MULTILINE)
+    return {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in headings}
+
+
+@pytest.mark.parametrize("page", PAGES, ids=[str(p.relative_to(ROOT)) for p in PAGES])
+def test_relative_links_and_anchors_resolve(page):
+    text = re.sub(r"```.*?```", "", page.read_text(), flags=re.DOTALL)
+    for target in re.findall(r"\]\(([^)\s]+)\)", text):
+        if re.match(r"[a-z]+:", target):
+            continue
+        path, _, anchor = target.partition("#")
+        file = (page.parent / path).resolve() if path else page
+        assert file.exists(), f"{page.relative_to(ROOT)}: {target} does not exist"
+        if anchor and file.suffix == ".md":
+            assert anchor in _anchors(file), f"{page.relative_to(ROOT)}: no heading #{anchor}"
+
+
+@pytest.mark.parametrize("page", PAGES, ids=[str(p.relative_to(ROOT)) for p in PAGES])
+def test_papers_are_cited_by_authors_and_year(page):
+    text = page.read_text()
+    assert not re.findall(r"\w+_[0-9a-f]{16}(?:\.txt)?", text), "a paper cited by file name"
+    assert not re.findall(r"[Pp]apers? 00[0-3]\b|\b00[0-3] (?:Eq|Section)", text), (
+        "a paper cited by its number: use authors and year (docs/references.md)")
+
+
 def test_a_fragment_is_marked_and_the_rest_is_found():
     text = ("x\n\n```python\nprint(1)\n```\n" f"{FRAGMENT}\n```python\nundefined\n```\n"
             "- item:\n\n  ```toml\n  a = 1\n  ```\n")

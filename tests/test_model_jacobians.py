@@ -85,7 +85,7 @@ def test_arm_jacobian_matches_finite_differences_of_the_arm_alone(models, name):
 
 
 def test_vehicle_pose_jacobian_is_fossen_for_a_full_spatial_vehicle(models):
-    # 003_229789978cc4b235.txt, Eq. (2)-(3), written out independently
+    # Wang et al. (2017), Eq. (2)-(3), written out independently
     model = models["bluerov2_heavy_alpha5"]
     phi, theta, psi = 0.3, -0.2, 2.0
     state = model.state(model.configuration([1.0, 2.0, 3.0, phi, theta, psi], model.home()[7:]))

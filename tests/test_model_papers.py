@@ -10,7 +10,7 @@ from uvms_qp.model.bundled import WANG_MOUNT
 
 
 def test_soylu_initial_tool_position_000_section_3():
-    # 000_7b5f597fe4e36aa4.txt, Section 3: q = [0 0 0 pi/3 -pi/3 pi/3] -> x_p = [3, 1.7321] m
+    # Soylu et al. (2007), Section 3: q = [0 0 0 pi/3 -pi/3 pi/3] -> x_p = [3, 1.7321] m
     model = load_model("soylu_planar")
     q = model.configuration([0.0, 0.0, 0.0], [math.pi / 3, -math.pi / 3, math.pi / 3])
     tool = model.frame_pose(q, "tool")
@@ -29,7 +29,7 @@ def test_soylu_arm_base_is_one_metre_ahead_of_the_vehicle():
 
 
 def test_santos_initial_tool_pose_001_simulation():
-    # 001_0fa6eac0390842e0.txt: q = [1.47 -1 0.3] -> x_E = 5.92 m, y_E = 4.29 m, psi_E = 0.77 rad
+    # dos Santos et al. (2006): q = [1.47 -1 0.3] -> x_E = 5.92 m, y_E = 4.29 m, psi_E = 0.77 rad
     model = load_model("santos_planar")
     q = model.configuration([0.0, 0.0, 0.0], [1.47, -1.0, 0.3])
     tool = model.frame_pose(q, "tool")
@@ -40,7 +40,7 @@ def test_santos_initial_tool_pose_001_simulation():
 
 
 def test_wang_tool_relative_to_arm_base_003_simulation_setup():
-    # 003_229789978cc4b235.txt: q = [0 -45 90 45 0] deg -> x = 0.5907 m, |z| = 0.363 m in the base
+    # Wang et al. (2017): q = [0 -45 90 45 0] deg -> x = 0.5907 m, |z| = 0.363 m in the base
     # frame. The table gives y = -0.068 m (the paper prints 0.053; see docs/models.md).
     model = load_model("wang_9dof")
     q = model.configuration(np.zeros(6), np.radians([0.0, -45.0, 90.0, 45.0, 0.0]))
@@ -65,14 +65,14 @@ def test_wang_joint_limits_from_003_simulation_setup():
 
 
 def test_nenchev_wrist_centre_002_section_4():
-    # 002_1230892968c9c95c.txt, Section 4: (0, 0, 0, -90) deg -> wrist centre (1, 0, 1) m
+    # Nenchev and Tsumaki, Section 4: (0, 0, 0, -90) deg -> wrist centre (1, 0, 1) m
     model = load_model("nenchev_pa10_arm")
     q = model.configuration([], np.radians([0.0, 0.0, 0.0, -90.0]))
     assert model.frame_pose(q, "tool")[:3, 3] == pytest.approx([1.0, 0.0, 1.0], abs=1e-12)
 
 
 def _nenchev_jacobian(q, d3=1.0, d5=1.0):
-    """002_1230892968c9c95c.txt, Section 3: the printed entries j11 .. j34.
+    """Nenchev and Tsumaki, Section 3: the printed entries j11 .. j34.
 
     j11 is printed with ``d5 (C4 S2 + ...)``; the other eleven entries (and the finite-difference
     derivative of the position they integrate to) need ``d5 (S1 C4 S2 + ...)``: a typo in the

@@ -2,7 +2,7 @@
 
 ``paper001_circle`` runs ``santos_planar`` (planar vehicle, three 2 m links moving in the
 horizontal plane) without a manipulability task: the probe measures Yoshikawa's ``w`` of the
-``x, y`` rows (``000_7b5f597fe4e36aa4.txt, Eq. (18)``), the rows a default ManipulabilityTask uses;
+``x, y`` rows (Soylu et al. (2007), Eq. (18)), the rows a default ManipulabilityTask uses;
 the ``z`` row of a planar arm is zero, so the three position rows would always give 0.
 """
 
@@ -14,7 +14,7 @@ import pytest
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario
 
-LINK = 2.0  # [m] the three links of 001_0fa6eac0390842e0.txt's planar arm
+LINK = 2.0  # [m] the planar arm of dos Santos et al. (2006): three links
 
 
 def planar_3r_manipulability(joints):

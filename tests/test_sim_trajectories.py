@@ -77,7 +77,7 @@ def test_circle_radius_plane_and_derivative(center, radius, T, turns, normal, fr
 
 
 def test_paper_001_circle_two_turns_in_ten_seconds():
-    # 001_0fa6eac0390842e0.txt: a 1 m-diameter circle, two returns in 10 s
+    # dos Santos et al. (2006): a 1 m-diameter circle, two returns in 10 s
     traj = CircleTrajectory([1.0, 2.0, 0.0], 0.5, 10.0, turns=2.0)
     np.testing.assert_allclose(traj.sample(0.0).position, traj.sample(5.0).position, atol=1e-12)
     np.testing.assert_allclose(traj.sample(2.5).position, [0.5, 2.0, 0.0], atol=1e-12)
