@@ -48,6 +48,26 @@ def test_scenarios_lists_each_bundled_scenario_with_its_description(capsys):
         assert line.endswith(data["description"])
 
 
+@pytest.mark.parametrize("command", ["scenarios", "models"])
+def test_lists_wrap_to_a_100_column_terminal_and_keep_one_line_per_row_in_a_pipe(
+        command, monkeypatch, capsys):
+    assert main([command]) == 0
+    piped = capsys.readouterr().out.splitlines()
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    monkeypatch.setenv("COLUMNS", "100")
+    assert main([command]) == 0
+    wrapped = capsys.readouterr().out.splitlines()
+    assert max(len(line) for line in wrapped) < 100 < max(len(line) for line in piped)
+    indent = len(piped[0]) - len(piped[0].split()[-1])  # where the description column starts
+    rows = []
+    for line in wrapped:
+        if line[:indent].strip():
+            rows.append(line)
+        else:
+            rows[-1] += " " + line.strip()
+    assert [" ".join(r.split()) for r in rows] == [" ".join(r.split()) for r in piped]
+
+
 @pytest.mark.parametrize("command", sorted(_commands()))
 def test_help_is_plain_text(command):
     text = _commands()[command].format_help()

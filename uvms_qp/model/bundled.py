@@ -177,11 +177,19 @@ class BundledModel:
 _REGISTRY: dict[str, BundledModel] = {
     entry.name: entry
     for entry in (
-        BundledModel("soylu_planar", soylu_planar, "ROPOS planar UVMS, 3 x 1 m links (000)"),
-        BundledModel("santos_planar", santos_planar, "planar UVMS, 3 x 2 m links (001)"),
-        BundledModel("wang_9dof", wang_9dof, "4-DOF vehicle, passive roll/pitch, 5-DOF arm (003)"),
         BundledModel(
-            "nenchev_pa10_arm", nenchev_pa10_arm, "PA-10 4-DOF positioning arm, fixed (002)"
+            "soylu_planar", soylu_planar, "ROPOS planar UVMS, 3 x 1 m links (Soylu et al. 2007)"
+        ),
+        BundledModel(
+            "santos_planar", santos_planar, "planar UVMS, 3 x 2 m links (dos Santos et al. 2006)"
+        ),
+        BundledModel(
+            "wang_9dof", wang_9dof,
+            "4-DOF vehicle, passive roll/pitch, 5-DOF arm (Wang et al. 2017)",
+        ),
+        BundledModel(
+            "nenchev_pa10_arm", nenchev_pa10_arm,
+            "PA-10 4-DOF positioning arm, fixed base (Nenchev and Tsumaki)",
         ),
         BundledModel(
             "bluerov2_heavy_alpha5",
