@@ -240,10 +240,10 @@ def print_breakdown(model, ctrl, q0, reps, step=False):
         state = model.state(q)
         assembler.fill(state, 0.0)
         samples["state+rows+bounds"].append(clock() - start)
-        for task, A, lo, hi in slots:
+        for task, A, sides in slots:
             start = clock()
             state = model.state(q)
-            task.fill(state, 0.0, A, lo, hi)
+            task.fill(state, 0.0, A, sides)
             samples[f"task {task.name} ({type(task).__name__})"].append(clock() - start)
         for c in box_cons:
             lower.fill(-np.inf)
