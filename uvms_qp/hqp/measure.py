@@ -42,6 +42,7 @@ Certifier = Callable[[Problem, FloatArray], "int | None"]
 _OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
 _SQRT = math.sqrt
 _INF = math.inf
+_minimum, _subtract, _multiply = np.minimum, np.subtract, np.multiply
 
 Measured = tuple[FloatArray, FloatArray, list[float]]
 """``(s, x_clipped, squares)``: slacks at x, x clipped into the box (a view of a fresh array),
@@ -57,9 +58,11 @@ def measure(problem: Problem, x: FloatArray) -> Measured:
     """
     z = problem.A.dot(x)
     c = np.maximum(z, problem.lo)
-    np.minimum(c, problem.hi, out=c)
-    s = np.subtract(z, c)
-    return s, c[:problem.n], problem.G.dot(s * s).tolist()
+    _minimum(c, problem.hi, out=c)
+    s = _subtract(z, c, out=z)
+    squares = problem.squares
+    _multiply(s, s, out=squares)
+    return s, c[:problem.n], problem.G.dot(squares).tolist()
 
 
 def _largest(s: FloatArray) -> tuple[float, int]:
@@ -183,9 +186,8 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             message = (message + "; " if message else "") + "non-finite level residual"
         else:
             status = _OPTIMAL
-            spans = problem.spans
             for k, r in enumerate(residuals):
-                if r > level_tol and r > level_tol * problem.scale(*spans[k]):
+                if r > level_tol and r > level_tol * problem.level_scale(k):
                     infeasible, status = k, _LEVEL_INFEASIBLE
                     break
             if infeasible is not None and certify is not None:
@@ -195,4 +197,4 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
                     message = (message + "; " if message else "") + (
                         f"level {failed} is not proven optimal")
     return HierarchyResult(x, status, solver, residuals, infeasible, hv, solve_time, message,
-                           info or {}, s, problem.spans, problem.sides[:, :problem.n].copy())
+                           info or {}, s, problem.spans, problem.box.copy())

@@ -57,6 +57,7 @@ ZERO = "zero"
 HOLD_ZERO = "hold_zero"
 
 _OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
+_VALUES = {status: status.value for status in Status}  # without the enum's property per step
 
 #: Every stage name, in ladder order.
 STAGES: tuple[str, ...] = (PRIMARY, COLD_RETRY, ALTERNATE, RELAXED, DECAYED, ZERO, HOLD_ZERO)
@@ -271,7 +272,7 @@ class SafeSolver:
             self.previous = result.x
             self.consecutive = 0
             self.stage_counts[PRIMARY] += 1
-            self.status_counts[result.status.value] += 1
+            self.status_counts[_VALUES[result.status]] += 1
             elapsed = self._clock() - start
             return SafeSolve(result.x, result, PRIMARY, (), 0.0, False, elapsed > self._budget,
                              0, elapsed)
@@ -361,7 +362,7 @@ class SafeSolver:
         self.previous = x
         self.consecutive = 0
         self.stage_counts[stage] += 1
-        self.status_counts[result.status.value] += 1
+        self.status_counts[_VALUES[result.status]] += 1
         elapsed = self._clock() - start
         return SafeSolve(x, result, stage, tuple(attempts), clipped,
                          clipped > self.clip_flag_tol, elapsed > self._budget, dropped, elapsed)
@@ -383,7 +384,7 @@ class SafeSolver:
         self.previous = result.x
         self.consecutive += 1
         self.stage_counts[stage] += 1
-        self.status_counts[result.status.value] += 1
+        self.status_counts[_VALUES[result.status]] += 1
         elapsed = self._clock() - start
         return SafeSolve(result.x, result, stage, tuple(attempts), 0.0, False,
                          elapsed > self._budget, 0, elapsed)
