@@ -82,6 +82,7 @@ class _StackScheme:
         self.safe = safe
         self.problem = problem
         self.solver_name = safe.name
+        self._fill: Callable[[State, float], Any] = assembler.fill  # the tick's rows
 
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Fill the problem, solve it through the ladder, measure the command.
@@ -95,9 +96,8 @@ class _StackScheme:
         """
         clock = self.safe.clock
         start = clock()
+        self._fill(state, t)
         assembler = self.assembler
-        assembler.fill(state, t)
-        self._prepare()
         try:
             out = self.safe.solve(self.problem, start)
         except NoSolutionFound:
@@ -106,9 +106,6 @@ class _StackScheme:
         if out.stage in DEGRADED_STAGES:  # e.g. an empty box, which no back-end can answer
             assembler.check_box(state)
         return assembler.step_result(out, t, clock() - start, self.name, self.solver_name)
-
-    def _prepare(self) -> None:
-        """Per-tick work of the scheme after the stack is written (none by default)."""
 
     def reset(self) -> None:
         """Reset every task's run-time memory and the fallback ladder."""
@@ -151,11 +148,15 @@ class WeightedScheme(_StackScheme):
         p = len(sizes)
         self._factors = np.repeat([priority_ratio ** (p - 1 - k) for k in range(p)], sizes)
         self._version = -1
+        self._fill = self._fill_weighted
 
-    def _prepare(self) -> None:
-        version = self.assembler.weights_version
+    def _fill_weighted(self, state: State, t: float) -> None:
+        """The stack's rows, and the priority weights whenever a row weight changed."""
+        assembler = self.assembler
+        assembler.fill(state, t)
+        version = assembler.weights_version
         if version != self._version:
-            self.problem.set_weights(self.assembler.problem.w * self._factors)
+            self.problem.set_weights(assembler.problem.w * self._factors)
             self._version = version
 
 

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
-from .problem import Problem
+from .problem import Problem, scale_of
 from .result import OK_STATUSES, HierarchyResult, Status
 
 #: ``certify(problem, x) -> k``: the first level of ``x`` that is neither met nor proven optimal,
@@ -187,7 +187,7 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
         else:
             status = _OPTIMAL
             for k, r in enumerate(residuals):
-                if r > level_tol and r > level_tol * problem.level_scale(k):
+                if r > level_tol and r > level_tol * scale_of(problem.level_sides[k]):
                     infeasible, status = k, _LEVEL_INFEASIBLE
                     break
             if infeasible is not None and certify is not None:

@@ -37,15 +37,13 @@ def _count(value: Any, name: str, least: int) -> int:
     return int(value)
 
 
-def _scale(sides: FloatArray) -> float:
+def scale_of(sides: FloatArray) -> float:
     """``max(1, max |finite entry|)`` of a ``(2, m)`` block of sides."""
     lo, hi = sides.tolist()
-    values = lo + hi
-    if not values:
-        return 1.0
-    big = max(max(values), -min(values))
+    values = lo if lo == hi else lo + hi  # equality rows: one side is enough
+    big = max(map(abs, values), default=0.0)
     if big == math.inf:
-        big = max(map(abs, filter(math.isfinite, values)), default=0.0)
+        big = max(filter(math.isfinite, map(abs, values)), default=0.0)
     return big if big > 1.0 else 1.0
 
 
@@ -183,11 +181,11 @@ class Problem:
 
     def scale(self, start: int, end: int) -> float:
         """``max(1, max |finite side|)`` over stacked rows ``start:end`` (relative tolerances)."""
-        return _scale(self.sides[:, start:end])
+        return scale_of(self.sides[:, start:end])
 
     def level_scale(self, k: int) -> float:
         """:meth:`scale` of the rows of level ``k``."""
-        return _scale(self.level_sides[k])
+        return scale_of(self.level_sides[k])
 
     @property
     def hard_scale(self) -> float:

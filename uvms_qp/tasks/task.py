@@ -311,7 +311,7 @@ class ErrorTask(Task):
         if ff is not None:
             side += ff
         sides[...] = side  # both sides at once
-        self.last_error = e
+        self._error = e
 
     @final
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
