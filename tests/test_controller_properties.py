@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from uvms_qp.bench.stacks import random_bounds, random_stack
 from uvms_qp.controller import Controller
+from uvms_qp.hqp import Status
 from uvms_qp.model import load_model
 from uvms_qp.stack import Stack
 
@@ -35,12 +36,13 @@ def check_draw(model, seed, solver):
     state, stack = random_problem(model, rng)
     full = Controller(model, stack, solver=solver, dt=0.05).step(state, 0.0)
     assert np.all(np.isfinite(full.zeta))
-    assert full.ok, full.summary()
+    # ok (proven), or honestly not: never an ok status on an answer the certificate rejects
+    assert full.ok or full.status is Status.UNPROVEN, full.summary()
     assert full.bound_violation <= 1e-7, full.summary()
     for k in range(len(stack.levels) - 1):
         partial = Stack(levels=list(stack.levels[: k + 1]), constraints=list(stack.constraints))
         sub = Controller(model, partial, solver=solver, dt=0.05).step(state, 0.0)
-        assert sub.ok
+        assert sub.ok or sub.status is Status.UNPROVEN
         for j in range(k + 1):
             a, b = full.level_violations[j], sub.level_violations[j]
             assert abs(a - b) <= 1e-5 * (1.0 + b), (
