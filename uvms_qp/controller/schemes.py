@@ -17,9 +17,10 @@ guard and post-check (shape, finiteness, hard rows, deadline):
 * :class:`NullspaceScheme` (``"nullspace"``): the closed-form recursive null-space scheme
   (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels, in the metric W of Eq. (17)),
   saturated into the hard box (``StepResult.saturated`` says when that changed the command);
-  its status judges the saturated command against the levels, and hard rows it breaks send the
-  step down the ladder. It has no notion of inequality rows: a stack with inequality tasks is
-  refused at construction.
+  its status judges the saturated command against the levels (``unproven`` when the
+  optimality certificate cannot prove it the optimum of the boxed problem: the command stays
+  the closed form's), and hard rows it breaks send the step down the ladder. It has no notion
+  of inequality rows: a stack with inequality tasks is refused at construction.
 
 The papers' schemes (:mod:`uvms_qp.schemes`) implement the same :class:`Scheme` protocol.
 """
@@ -168,7 +169,7 @@ class NullspaceScheme(_StackScheme):
                  deadline: float | None, strict: bool, **_: Any) -> None:
         require_equality_tasks(assembler, "scheme 'nullspace'")
         safe = SafeSolver("nullspace", None, options, alternate=default_alternate("nullspace"),
-                          deadline=deadline, strict=strict, saturate=True)
+                          deadline=deadline, strict=strict, saturate=True, accept_unproven=True)
         super().__init__(assembler, safe, assembler.problem)
 
 
