@@ -57,6 +57,7 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("tool_base_radius_mean", "m"),
     ("step_time_median_us", "us"),
     ("nan_steps", ""),
+    ("unproven_steps", ""),
 )
 
 #: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).

@@ -16,7 +16,10 @@ commands for ``k = 0..N-1``), independently of the controller's own diagnostics:
 - ``payload_objective_max`` [N m^2]: largest ``(x_E^2 + y_E^2) F``, the objective of
   ``003_229789978cc4b235.txt``, Eq. (20), that a payload task bounds or reduces;
 - ``step_time_median_us``, ``step_time_p99_us``: wall time of the controller step [us];
-- ``nan_steps``: steps whose command was not finite (replaced by zero).
+- ``nan_steps``: steps whose command was not finite (replaced by zero);
+- ``status_counts``: steps per status; ``unproven_steps``: steps whose command is inside the hard
+  set but not proven the lexicographic optimum by the optimality certificate (status
+  ``unproven``; see ``docs/solver.md``).
 
 Scenario phases (``[[phases]]``) get the same quantities restricted to their time window.
 """
@@ -129,6 +132,7 @@ def compute_metrics(result: SimulationResult) -> dict[str, Any]:
     for status in result.status:
         statuses[status] = statuses.get(status, 0) + 1
     metrics["status_counts"] = statuses
+    metrics["unproven_steps"] = statuses.get("unproven", 0)
     if result.heading is None:
         metrics.pop("vehicle_yaw_error_final", None)
         metrics.pop("vehicle_yaw_error_max", None)
