@@ -384,8 +384,9 @@ class Certifier:
         stat = absR.max(axis=1).tolist()
         # a residual on a variable without a box is not bounded by a width: such a level is
         # settled by the level's own dual below
-        loose = [False] * len(unmet) if unboxed is None else (
-            absR[:, unboxed] > 0.0).any(axis=1).tolist()
+        loose: list[bool] = [False] * len(unmet)
+        if unboxed is not None:
+            loose = [bool(v) for v in (absR[:, unboxed] > 0.0).any(axis=1)]
         dfl, frl = df.tolist(), freeze.tolist()
         out = {}
         opt_tol = self.opt_tol

@@ -245,13 +245,13 @@ def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: Fl
             # the working set's equality QP has no minimiser (H is only semi-definite): descend
             # along a direction of zero curvature that keeps the working constraints, to the
             # first blocking constraint
-            p = _flat_descent(H, C, grad)
-            if p is None:
+            flat = _flat_descent(H, C, grad)
+            if flat is None:
                 return None
-            hit, alpha = _blocking(G, h, z, p, work, rel, cap=math.inf)
+            hit, alpha = _blocking(G, h, z, flat, work, rel, cap=math.inf)
             if hit < 0:
                 return None  # unbounded below
-            z = z + alpha * p
+            z = z + alpha * flat
             landed = False
             work = work.copy()
             work[hit] = True

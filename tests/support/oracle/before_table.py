@@ -1,12 +1,13 @@
 """Certified-wrong ok answers per family and solver (run as a script; not collected by pytest).
 
     PYTHONPATH=$PWD python -m tests.support.oracle.before_table [--count 60] [--families ...]
-        [--solvers ...] [--uncertified] [--jobs 2] [--out FILE]
+        [--solvers ...] [--uncertified] [--time-cap SECONDS] [--jobs 2] [--out FILE]
 
 For every problem of every family (:mod:`uvms_qp.bench.problems`) and every installed solver
 (as a user gets it: :class:`~uvms_qp.hqp.HierarchySolver` with its defaults, i.e. the
 optimality certificate asked and the repair on; ``--uncertified`` switches both off, which is how
-the library answered before the certificate was on by default), an answer with an ok status
+the library answered before the certificate was on by default; ``--time-cap`` gives every solve
+the cap a controller's safe solver sets), an answer with an ok status
 (``optimal`` or ``level_infeasible``) is judged by the oracle; it is *certified-wrong* when a
 verified point of some level's frozen set improves that level by more than 1e-6 (relative to the
 level's scale). Prints one line per (family, solver): wrong / unproven / ok / problems, the other
@@ -32,7 +33,7 @@ OK = ("optimal", "level_infeasible")
 
 
 def run_one(args):
-    fam, seed, solvers, uncertified = args
+    fam, seed, solvers, uncertified, time_cap = args
     p = family(fam, 1, seed)[0]
     orc = Oracle(*p.stacked())
     eq_only = all(np.all(b[1] == b[2]) for b in p.levels)
@@ -40,7 +41,7 @@ def run_one(args):
     for solver in solvers:
         if solver == "nullspace" and not eq_only:
             continue
-        hs = HierarchySolver(solver)
+        hs = HierarchySolver(solver, options=None if time_cap is None else {"time_cap": time_cap})
         if uncertified:
             hs.certify, hs.repair = None, False
         t0 = time.perf_counter()
@@ -86,10 +87,12 @@ def main():
     ap.add_argument("--families", nargs="*", default=list(MATRIX_FAMILIES + CONTROLLER_FAMILIES))
     ap.add_argument("--solvers", nargs="*", default=list(available_solvers()))
     ap.add_argument("--uncertified", action="store_true")
+    ap.add_argument("--time-cap", type=float, default=None)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="")
     a = ap.parse_args()
-    jobs = [(f, s, tuple(a.solvers), a.uncertified) for f in a.families for s in range(a.count)]
+    jobs = [(f, s, tuple(a.solvers), a.uncertified, a.time_cap)
+            for f in a.families for s in range(a.count)]
     with ProcessPoolExecutor(a.jobs) as ex:
         results = [r for rs in ex.map(run_one, jobs, chunksize=4) for r in rs]
     if a.out:
