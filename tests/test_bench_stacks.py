@@ -11,12 +11,10 @@ from uvms_qp.controller import Controller
 from uvms_qp.model import load_model
 from uvms_qp.tasks import EndEffectorTask
 
-ROV = load_model("bluerov2_heavy_alpha5")
 
-
-def test_demo_stack_levels_and_bounds_hold_on_the_bluerov():
-    q = ROV.home()
-    target = ROV.frame_pose(q, "tool")[:3, 3] + [0.05, 0.0, 0.0]
+def test_demo_stack_levels_and_bounds_hold_on_the_bluerov(rov):
+    q = rov.home()
+    target = rov.frame_pose(q, "tool")[:3, 3] + [0.05, 0.0, 0.0]
     stack = demo_stack(position=list(target))
     assert [[t.type_name for t in level.tasks] for level in stack.levels] == [
         ["end_effector"], ["manipulability", "joint_limit"],
@@ -24,7 +22,7 @@ def test_demo_stack_levels_and_bounds_hold_on_the_bluerov():
         ["vehicle_motion", "posture"]]
     assert [type(c) for c in stack.constraints] == [JointPositionBounds, JointVelocityBounds,
                                                     VehicleRateBounds]
-    result = Controller(ROV, stack, dt=0.05).step(ROV.state(q), 0.0)
+    result = Controller(rov, stack, dt=0.05).step(rov.state(q), 0.0)
     assert result.ok and result.bound_violation <= 1e-9
     # vehicle rates within 0.5 m/s and 0.3 rad/s
     assert np.all(np.abs(result.zeta[:3]) <= 0.5 + 1e-9)

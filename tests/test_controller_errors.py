@@ -13,18 +13,12 @@ from uvms_qp import UvmsQpError
 from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
 from uvms_qp.controller import Controller
 from uvms_qp.errors import InputError, NonFiniteError, ShapeError
-from uvms_qp.model import load_model
 from uvms_qp.safety import SafeSolver
 from uvms_qp.schemes import WangPseudoinverse
 from uvms_qp.sim.trajectories import TrajectorySample
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import EndEffectorTask, PostureTask, StationKeepingTask
 from uvms_qp.testing.faults import Fault, inject
-
-
-@pytest.fixture(scope="module")
-def rov():
-    return load_model("bluerov2_heavy_alpha5")
 
 
 def _stack(**ee):
@@ -78,7 +72,7 @@ def test_controller_model_must_be_a_model(bad):
 
 # ----------------------------------------------------------------------- what step() is given
 @pytest.mark.parametrize("t", [math.nan, math.inf, -math.inf, "0", None, True, 1j])
-def test_step_time_must_be_a_finite_real_number(rov, t):
+def test_step_time_must_be_a_finite_real_number(rov, models, t):
     """``t`` is read by trajectories and recorded in results: never converted, never NaN."""
     state = rov.state(rov.home())
     error = NonFiniteError if isinstance(t, float) else InputError
@@ -87,22 +81,22 @@ def test_step_time_must_be_a_finite_real_number(rov, t):
         with pytest.raises(error, match=r"^t: expected a "):
             controller.step(state, t)
         assert controller.step(state, 1).t == 1.0  # an integer time is a real number
-    wang = load_model("wang_9dof")
+    wang = models["wang_9dof"]
     scheme = WangPseudoinverse().bind(wang, 0.01)
     with pytest.raises(error, match=r"^t: expected a "):
         scheme.step(wang.state(wang.home()), t)
 
 
-def test_controller_step_with_a_configuration_says_to_build_a_state():
-    model = load_model("bluerov2_heavy_alpha5")
+def test_controller_step_with_a_configuration_says_to_build_a_state(rov):
+    model = rov
     controller = Controller(model, Stack(levels=[Level(PostureTask())]))
     with pytest.raises(InputError, match=r"expects a State.*model\.state\(q\)"):
         controller.step(model.home(), 0.0)
     assert controller.step(model.state(model.home()), 0.0).status == "optimal"
 
 
-def test_scheme_step_with_a_configuration_says_to_build_a_state():
-    model = load_model("wang_9dof")
+def test_scheme_step_with_a_configuration_says_to_build_a_state(models):
+    model = models["wang_9dof"]
     scheme = WangPseudoinverse().bind(model, 0.01)
     with pytest.raises(InputError, match=r"expects a State.*model\.state\(q\)"):
         scheme.step(model.home(), 0.0)
@@ -140,7 +134,7 @@ RUN_TIME = [
 
 @pytest.mark.parametrize("case, error, fragment", [c[1:] for c in RUN_TIME],
                          ids=[c[0] for c in RUN_TIME])
-def test_bad_input_at_run_time_never_reaches_a_back_end(rov, case, error, fragment):
+def test_bad_input_at_run_time_never_reaches_a_back_end(rov, models, case, error, fragment):
     tool = EndEffectorTask(mode="position", name="tool", trajectory=_NaNTrajectory())
     if case in ("set_target_rotation",):
         tool = EndEffectorTask(mode="pose", name="tool", position=[0.5, 0.0, 0.2],
@@ -160,7 +154,7 @@ def test_bad_input_at_run_time_never_reaches_a_back_end(rov, case, error, fragme
         elif case == "update_gain":
             tool.update(gain=-3.0)
         else:
-            ctrl.step(load_model("wang_9dof").state(load_model("wang_9dof").home()), 0.0)
+            ctrl.step(models["wang_9dof"].state(models["wang_9dof"].home()), 0.0)
     assert isinstance(info.value, UvmsQpError)
     assert fragment in str(info.value)
     assert sum(s.n_calls for s in spies) == calls  # nothing reached a back-end

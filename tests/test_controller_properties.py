@@ -15,11 +15,8 @@ from hypothesis import strategies as st
 
 from uvms_qp.bench.stacks import random_bounds, random_stack
 from uvms_qp.controller import Controller
-from uvms_qp.model import load_model
 from uvms_qp.stack import Stack
 
-MODELS = {name: load_model(name) for name in
-          ("bluerov2_heavy_alpha5", "wang_9dof", "soylu_planar")}
 SOLVERS = ["daqp", "cascade:quadprog", "cascade:piqp"]
 
 
@@ -49,8 +46,8 @@ def check_draw(model, seed, solver):
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
-@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize("name", ["bluerov2_heavy_alpha5", "wang_9dof", "soylu_planar"])
 @settings(max_examples=25)
 @given(seed=st.integers(0, 2**31 - 1))
-def test_random_stacks_finite_bounded_and_prioritised(name, solver, seed):
-    check_draw(MODELS[name], seed, solver)
+def test_random_stacks_finite_bounded_and_prioritised(models, name, solver, seed):
+    check_draw(models[name], seed, solver)

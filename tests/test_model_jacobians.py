@@ -11,11 +11,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from uvms_qp import bundled_models, load_model
+from uvms_qp import bundled_models
 
 H = 1e-6
 TOL = 1e-6
-MODELS = {name: load_model(name) for name in bundled_models()}
 
 
 def _fd_twists(model, q, zeta):
@@ -30,11 +29,11 @@ def _fd_twists(model, q, zeta):
     return out, eta_rate
 
 
-@pytest.mark.parametrize("name", sorted(MODELS))
+@pytest.mark.parametrize("name", sorted(bundled_models()))
 @settings(max_examples=12)
 @given(seed=st.integers(0, 2**32 - 1))
-def test_frame_jacobians_match_finite_differences(name, seed):
-    model = MODELS[name]
+def test_frame_jacobians_match_finite_differences(models, name, seed):
+    model = models[name]
     rng = np.random.default_rng(seed)
     q = model.random_configuration(rng, tilt=0.5)
     zeta = rng.uniform(-1.0, 1.0, model.nv)
@@ -55,9 +54,9 @@ def test_frame_jacobians_match_finite_differences(name, seed):
         np.testing.assert_allclose(state.vehicle_pose_jacobian() @ zeta, eta_rate, atol=TOL)
 
 
-@pytest.mark.parametrize("name", sorted(MODELS))
-def test_arm_jacobian_is_the_joint_columns_in_arm_base_axes(name):
-    model = MODELS[name]
+@pytest.mark.parametrize("name", sorted(bundled_models()))
+def test_arm_jacobian_is_the_joint_columns_in_arm_base_axes(models, name):
+    model = models[name]
     rng = np.random.default_rng(7)
     for _ in range(5):
         state = model.state(model.random_configuration(rng))
@@ -69,10 +68,10 @@ def test_arm_jacobian_is_the_joint_columns_in_arm_base_axes(name):
         assert state.arm_jacobian("tool", rows="position").shape == (3, model.n_joints)
 
 
-@pytest.mark.parametrize("name", sorted(MODELS))
-def test_arm_jacobian_matches_finite_differences_of_the_arm_alone(name):
+@pytest.mark.parametrize("name", sorted(bundled_models()))
+def test_arm_jacobian_matches_finite_differences_of_the_arm_alone(models, name):
     # joint-rate motion with the vehicle still, seen from the arm base
-    model = MODELS[name]
+    model = models[name]
     rng = np.random.default_rng(11)
     q = model.random_configuration(rng)
     rates = rng.uniform(-1.0, 1.0, model.n_joints)
@@ -85,9 +84,9 @@ def test_arm_jacobian_matches_finite_differences_of_the_arm_alone(name):
     np.testing.assert_allclose(J_arm @ rates, np.concatenate((v, w)), atol=TOL)
 
 
-def test_vehicle_pose_jacobian_is_fossen_for_a_full_spatial_vehicle():
+def test_vehicle_pose_jacobian_is_fossen_for_a_full_spatial_vehicle(models):
     # 003_229789978cc4b235.txt, Eq. (2)-(3), written out independently
-    model = MODELS["bluerov2_heavy_alpha5"]
+    model = models["bluerov2_heavy_alpha5"]
     phi, theta, psi = 0.3, -0.2, 2.0
     state = model.state(model.configuration([1.0, 2.0, 3.0, phi, theta, psi], model.home()[7:]))
     c, s, t = np.cos, np.sin, np.tan

@@ -21,12 +21,10 @@ from uvms_qp.model.transforms import (
     rpy_to_rotation,
 )
 
-MODELS = {name: load_model(name) for name in bundled_models()}
 
-
-@pytest.mark.parametrize("name", sorted(MODELS))
-def test_every_model_has_the_standard_frames_and_consistent_sizes(name):
-    model = MODELS[name]
+@pytest.mark.parametrize("name", sorted(bundled_models()))
+def test_every_model_has_the_standard_frames_and_consistent_sizes(models, name):
+    model = models[name]
     for frame in ("world", "vehicle", "arm_base", "tool"):
         assert frame in model.frames
     assert model.nv == model.n_vehicle + model.n_joints == len(model.zeta_names)
@@ -55,10 +53,10 @@ def test_interleaved_states_keep_their_own_kinematics():
     np.testing.assert_allclose(s1.pose("tool"), fresh1.pose("tool"), atol=1e-14)
 
 
-@pytest.mark.parametrize("name", sorted(MODELS))
-def test_every_quantity_equals_pinocchio_on_a_fresh_data(name):
+@pytest.mark.parametrize("name", sorted(bundled_models()))
+def test_every_quantity_equals_pinocchio_on_a_fresh_data(models, name):
     """Poses, Jacobians, ``eta``, ``J_eta`` and arm quantities against an independent oracle."""
-    model = MODELS[name]
+    model = models[name]
     rng = np.random.default_rng(3)
     for _ in range(4):
         q = model.random_configuration(rng)
@@ -168,8 +166,8 @@ def test_returned_arrays_are_read_only_and_q_is_copied():
         st.floats(-3.1, 3.1), st.floats(-1.5, 1.5), st.floats(-3.1, 3.1),
     )
 )  # fmt: skip
-def test_configuration_split_round_trip_spatial(eta):
-    model = MODELS["bluerov2_heavy_alpha5"]
+def test_configuration_split_round_trip_spatial(models, eta):
+    model = models["bluerov2_heavy_alpha5"]
     joints = model.home()[7:]
     q = model.configuration(eta, joints)
     eta2, joints2 = model.split(q)
@@ -180,8 +178,8 @@ def test_configuration_split_round_trip_spatial(eta):
     np.testing.assert_array_equal(state.joints, joints)
 
 
-def test_integrate_moves_the_vehicle_along_its_body_axes():
-    model = MODELS["bluerov2_heavy_alpha5"]
+def test_integrate_moves_the_vehicle_along_its_body_axes(models):
+    model = models["bluerov2_heavy_alpha5"]
     psi = math.radians(90.0)
     q = model.configuration([0, 0, 0, 0, 0, psi], model.home()[7:])
     zeta = np.zeros(model.nv)
@@ -198,8 +196,8 @@ def test_integrate_moves_the_vehicle_along_its_body_axes():
     np.testing.assert_allclose(joints - model.home()[7:], [0, 0.5, 0, 0], atol=1e-15)
 
 
-def test_planar_integration_is_exact_for_constant_body_rates():
-    model = MODELS["soylu_planar"]
+def test_planar_integration_is_exact_for_constant_body_rates(models):
+    model = models["soylu_planar"]
     q = model.configuration([0, 0, 0], [0, 0, 0])
     zeta = np.array([1.0, 0.0, math.pi / 2, 0, 0, 0])  # drive a quarter circle of radius 2/pi
     eta, _ = model.split(model.integrate(q, zeta, 1.0))
@@ -207,8 +205,8 @@ def test_planar_integration_is_exact_for_constant_body_rates():
     np.testing.assert_allclose(eta, [r, r, math.pi / 2], atol=1e-12)
 
 
-def test_pose_in_and_frame_pose_agree():
-    model = MODELS["wang_9dof"]
+def test_pose_in_and_frame_pose_agree(models):
+    model = models["wang_9dof"]
     q = model.random_configuration(4)
     state = model.state(q)
     T_ref, T = state.pose("link2"), state.pose("tool")
@@ -218,22 +216,22 @@ def test_pose_in_and_frame_pose_agree():
     np.testing.assert_allclose(state.rotation("tool"), T[:3, :3])
 
 
-def test_neutral_and_fixed_base_layout():
-    arm = MODELS["nenchev_pa10_arm"]
+def test_neutral_and_fixed_base_layout(models):
+    arm = models["nenchev_pa10_arm"]
     assert arm.nq == arm.nv == arm.n_joints == 4
     assert arm.vehicle_kind == "fixed" and arm.actuated == () and arm.eta_size == 0
     state = arm.state(arm.neutral())
     np.testing.assert_array_equal(state.pose("vehicle"), np.eye(4))
     assert state.vehicle_pose_jacobian().shape == (0, 4)
     assert state.eta.shape == (0,)
-    rov = MODELS["bluerov2_heavy_alpha5"]
+    rov = models["bluerov2_heavy_alpha5"]
     np.testing.assert_allclose(rov.neutral()[3:7], [0, 0, 0, 1])
 
 
-def test_public_surface_is_reachable_from_the_package():
-    assert uvms_qp.Model is type(MODELS["soylu_planar"])
+def test_public_surface_is_reachable_from_the_package(models):
+    assert uvms_qp.Model is type(models["soylu_planar"])
     assert uvms_qp.load_model("soylu_planar").name == "soylu_planar"
     assert uvms_qp.bundled_models() == [
         "soylu_planar", "santos_planar", "wang_9dof", "nenchev_pa10_arm", "bluerov2_heavy_alpha5",
     ]  # fmt: skip
-    assert "soylu_planar" in repr(MODELS["soylu_planar"])
+    assert "soylu_planar" in repr(models["soylu_planar"])

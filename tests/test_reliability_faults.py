@@ -184,7 +184,6 @@ def test_every_scheme_runs_under_the_same_guard(scheme, solver, fault):
     """The weighted scheme, the closed form and a cascade: a faulted step gives a safe command
     and a truthful status from another stage, and the next step is the clean one."""
     from uvms_qp.bench.stacks import tool_posture_stack
-    from uvms_qp.model import load_model
     from uvms_qp.tasks import EndEffectorTask
 
     model = load_model("bluerov2_heavy_alpha5")
@@ -215,7 +214,6 @@ def test_every_scheme_runs_under_the_same_guard(scheme, solver, fault):
 def test_a_slow_step_is_flagged_on_every_scheme(scheme):
     """A 120 ms solve (on a fake clock) against a 50 ms deadline is flagged, on every scheme."""
     from uvms_qp.bench.stacks import tool_posture_stack
-    from uvms_qp.model import load_model
     from uvms_qp.tasks import EndEffectorTask
 
     model = load_model("bluerov2_heavy_alpha5")
@@ -234,8 +232,8 @@ def test_a_slow_step_is_flagged_on_every_scheme(scheme):
 
 
 @pytest.mark.parametrize("fault", [Fault.NAN_SUCCESS, Fault.WILD_FAILURE, Fault.MEMORY])
-def test_nullspace_never_returns_a_non_finite_zeta(fault):
-    model = load_model("bluerov2_heavy_alpha5")
+def test_nullspace_never_returns_a_non_finite_zeta(rov, fault):
+    model = rov
     stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds(), VehicleRateBounds()],
                   levels=[Level(EndEffectorTask(position=[1.0, 0.0, 0.0])),
                           Level(StationKeepingTask())])

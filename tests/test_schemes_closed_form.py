@@ -9,7 +9,6 @@ from uvms_qp.analytic import end_point_field, self_motion_field
 from uvms_qp.controller import StepResult
 from uvms_qp.errors import ConfigError, InputError
 from uvms_qp.hqp import Status
-from uvms_qp.model import load_model
 from uvms_qp.schemes import (
     SCHEME_TYPES,
     NenchevSingularityConsistent,
@@ -24,9 +23,20 @@ from uvms_qp.schemes.scheme import _make_result
 from uvms_qp.sim.scenario import load_scenario
 from uvms_qp.sim.trajectories import LineTrajectory
 
-SOYLU = load_model("soylu_planar")
-WANG = load_model("wang_9dof")
-NENCHEV = load_model("nenchev_pa10_arm")
+
+@pytest.fixture(scope="module")
+def soylu(models):
+    return models["soylu_planar"]
+
+
+@pytest.fixture(scope="module")
+def wang(models):
+    return models["wang_9dof"]
+
+
+@pytest.fixture(scope="module")
+def nenchev(models):
+    return models["nenchev_pa10_arm"]
 
 
 def _moving_target(state, frame="tool"):
@@ -51,25 +61,25 @@ def test_scheme_for_the_wrong_model_kind_is_a_config_error():
         build_scheme("nenchev_sc", scenario)
 
 
-def test_step_before_bind_and_without_trajectory():
+def test_step_before_bind_and_without_trajectory(soylu):
     scheme = SoyluTaskPriority()
-    state = SOYLU.state(SOYLU.home())
+    state = soylu.state(soylu.home())
     with pytest.raises(InputError, match="bind"):
         scheme.step(state, 0.0)
-    scheme.bind(SOYLU, 0.01)
+    scheme.bind(soylu, 0.01)
     with pytest.raises(InputError, match="trajectory"):
         scheme.step(state, 0.0)
 
 
-def test_bad_parameters_name_the_culprit():
+def test_bad_parameters_name_the_culprit(soylu, wang):
     with pytest.raises(InputError, match="weights"):
-        SoyluTaskPriority(weights=[10, 10, 10, 1, 1]).bind(SOYLU, 0.01)
+        SoyluTaskPriority(weights=[10, 10, 10, 1, 1]).bind(soylu, 0.01)
     with pytest.raises(InputError, match="rho_bar"):
         SoyluDexterous(rho_bar=-1.0)
     with pytest.raises(InputError, match="w_max"):
         WangFuzzyGradientProjection(w_max=2.0)
     with pytest.raises(InputError, match="limit_constants"):
-        WangFuzzyGradientProjection(limit_constants=[1.0, 2.0]).bind(WANG, 0.01)
+        WangFuzzyGradientProjection(limit_constants=[1.0, 2.0]).bind(wang, 0.01)
     with pytest.raises(InputError, match="direction"):
         NenchevSingularityConsistent(direction=[0.0, 0.0, 0.0])
     with pytest.raises(InputError, match="projector"):
@@ -81,11 +91,11 @@ angles = st.lists(st.floats(-1.2, 1.2), min_size=3, max_size=3)
 
 @settings(max_examples=20)
 @given(angles, st.floats(0.0, 2.0))
-def test_soylu_schemes_meet_the_primary_task_exactly(q, t):
-    state = SOYLU.state(SOYLU.configuration([0.3, -0.2, 0.4], q))
+def test_soylu_schemes_meet_the_primary_task_exactly(soylu, q, t):
+    state = soylu.state(soylu.configuration([0.3, -0.2, 0.4], q))
     target = _moving_target(state)
     for cls in (SoyluTaskPriority, SoyluDexterous):
-        scheme = cls().bind(SOYLU, 0.01)
+        scheme = cls().bind(soylu, 0.01)
         scheme.track(target)
         zeta = scheme.step(state, t).zeta
         sample = target.sample(t)
@@ -95,11 +105,11 @@ def test_soylu_schemes_meet_the_primary_task_exactly(q, t):
                                    atol=1e-8)
 
 
-def test_dexterous_equals_task_priority_above_the_threshold():
-    state = SOYLU.state(SOYLU.home())  # rho = 1.5 > rho_bar = 1.3
+def test_dexterous_equals_task_priority_above_the_threshold(soylu):
+    state = soylu.state(soylu.home())  # rho = 1.5 > rho_bar = 1.3
     target = _moving_target(state)
-    a = SoyluTaskPriority().bind(SOYLU, 0.01)
-    b = SoyluDexterous().bind(SOYLU, 0.01)
+    a = SoyluTaskPriority().bind(soylu, 0.01)
+    b = SoyluDexterous().bind(soylu, 0.01)
     a.track(target)
     b.track(target)
     np.testing.assert_allclose(a.step(state, 0.5).zeta, b.step(state, 0.5).zeta, atol=1e-12)
@@ -108,13 +118,13 @@ def test_dexterous_equals_task_priority_above_the_threshold():
 
 @settings(max_examples=15)
 @given(st.lists(st.floats(-0.8, 0.8), min_size=5, max_size=5), st.floats(0.0, 50.0))
-def test_wang_schemes_meet_the_tool_rate(q, force):
+def test_wang_schemes_meet_the_tool_rate(wang, q, force):
     joints = np.asarray(q) + np.array([0.0, -0.5, 1.2, 0.5, 0.0])
-    state = WANG.state(WANG.configuration(np.zeros(6), joints))
+    state = wang.state(wang.configuration(np.zeros(6), joints))
     target = _moving_target(state)
     for scheme in (WangPseudoinverse(), WangFuzzyGradientProjection(force=force),
                    WangEuclideanProjection(force=force)):
-        scheme.bind(WANG, 0.01)
+        scheme.bind(wang, 0.01)
         scheme.track(target)
         zeta = scheme.step(state, 0.3).zeta
         sample = target.sample(0.3)
@@ -125,8 +135,8 @@ def test_wang_schemes_meet_the_tool_rate(q, force):
 
 @settings(max_examples=25)
 @given(st.lists(st.floats(-3.0, 3.0), min_size=4, max_size=4))
-def test_sc_fields_lie_in_the_kernel_of_the_model_jacobian(q):
-    state = NENCHEV.state(NENCHEV.configuration([], q))
+def test_sc_fields_lie_in_the_kernel_of_the_model_jacobian(nenchev, q):
+    state = nenchev.state(nenchev.configuration([], q))
     J = state.jacobian("tool", rows="position")
     c = abs(np.sin(q[1]) * (1 + np.cos(q[3])) + np.cos(q[1]) * np.cos(q[2]) * np.sin(q[3]))
     if c < 1e-3:  # the paper scaling divides by the shoulder term
@@ -137,7 +147,7 @@ def test_sc_fields_lie_in_the_kernel_of_the_model_jacobian(q):
     np.testing.assert_allclose(J @ f_sm[:4], 0.0, atol=1e-9)
     np.testing.assert_allclose(J @ f_ep[:4], v * f_ep[4], atol=1e-9)
     assert f_sm[3] == 0.0 and f_sm[4] == 0.0 and f_ep[2] == 0.0
-    scheme = NenchevSingularityConsistent().bind(NENCHEV, 0.01)
+    scheme = NenchevSingularityConsistent().bind(nenchev, 0.01)
     zeta = scheme.step(state, 0.0).zeta
     np.testing.assert_allclose(zeta, f_ep[:4], atol=1e-12)
 

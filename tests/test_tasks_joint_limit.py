@@ -13,11 +13,9 @@ import pytest
 
 from uvms_qp.analytic import LIMIT_CLEARANCE, joint_limit_gradient_bound
 from uvms_qp.controller import Controller
-from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import EndEffectorTask, JointLimitTask
 
-ROV = load_model("bluerov2_heavy_alpha5")
 C = np.array([10.0, 6.0, 10.0, 10.0])
 GAIN = 2.0
 
@@ -27,9 +25,9 @@ def exact_gradient(q, lo, hi, c):
     return (hi - lo) ** 2 * (2 * q - hi - lo) / (c * (hi - q) ** 2 * (q - lo) ** 2)
 
 
-def _rows_at(joints):
-    task = JointLimitTask(mode="gradient", strength=list(C), gain=GAIN).bind(ROV)
-    state = ROV.state(ROV.configuration(np.zeros(6), joints))
+def _rows_at(rov, joints):
+    task = JointLimitTask(mode="gradient", strength=list(C), gain=GAIN).bind(rov)
+    state = rov.state(rov.configuration(np.zeros(6), joints))
     return task.rows(state)
 
 
@@ -37,12 +35,12 @@ def _rows_at(joints):
 # clearance), farther inside (exact region)
 @pytest.mark.parametrize("offset", [-0.2, -1e-9, 0.0, 1e-9, 1e-3, 5e-3])
 @pytest.mark.parametrize("side", ["lower", "upper"])
-def test_gradient_rows_near_a_limit_are_finite_bounded_and_point_back(offset, side):
-    lo, hi = ROV.joint_lower, ROV.joint_upper
+def test_gradient_rows_near_a_limit_are_finite_bounded_and_point_back(rov, offset, side):
+    lo, hi = rov.joint_lower, rov.joint_upper
     span = hi - lo
     joints = lo + span * offset if side == "lower" else hi - span * offset
-    rows = _rows_at(joints)
-    cols = rows.A[:, ROV.n_vehicle:]
+    rows = _rows_at(rov, joints)
+    cols = rows.A[:, rov.n_vehicle:]
     np.testing.assert_array_equal(cols, np.eye(4))
     assert np.all(np.isfinite(rows.lower)) and np.array_equal(rows.lower, rows.upper)
     bound = GAIN * joint_limit_gradient_bound(lo, hi, C)
@@ -58,21 +56,21 @@ def test_gradient_rows_near_a_limit_are_finite_bounded_and_point_back(offset, si
         assert np.all(np.abs(rows.lower) <= np.abs(exact) * (1 + 1e-12))
 
 
-def test_gradient_rows_are_exact_outside_the_clearance():
-    lo, hi = ROV.joint_lower, ROV.joint_upper
+def test_gradient_rows_are_exact_outside_the_clearance(rov):
+    lo, hi = rov.joint_lower, rov.joint_upper
     span = hi - lo
     for frac in (1.01 * LIMIT_CLEARANCE, 0.05, 0.3, 0.5, 0.9, 1 - 1.01 * LIMIT_CLEARANCE):
         joints = lo + frac * span
-        rows = _rows_at(joints)
+        rows = _rows_at(rov, joints)
         np.testing.assert_allclose(rows.lower, -GAIN * exact_gradient(joints, lo, hi, C),
                                    rtol=1e-12, atol=1e-12)
 
 
-def test_gradient_grows_toward_the_limit_and_stays_near_the_bound_beyond_it():
-    lo, hi = ROV.joint_lower, ROV.joint_upper
+def test_gradient_grows_toward_the_limit_and_stays_near_the_bound_beyond_it(rov):
+    lo, hi = rov.joint_lower, rov.joint_upper
     span = hi - lo
     fracs = np.linspace(0.3, -0.1, 81)  # from inside, through the upper limit, to outside
-    values = np.array([-_rows_at(hi - f * span).lower for f in fracs])
+    values = np.array([-_rows_at(rov, hi - f * span).lower for f in fracs])
     inside = fracs >= 0.0
     # |grad| grows toward the limit (continuously through the clearance)...
     assert np.all(np.diff(values[inside], axis=0) >= -1e-9 * np.abs(values[inside][1:]))
@@ -83,33 +81,33 @@ def test_gradient_grows_toward_the_limit_and_stays_near_the_bound_beyond_it():
 
 @pytest.mark.parametrize("solver", ["daqp", "nullspace", "cascade:quadprog", "cascade:proxqp",
                                     "cascade:osqp", "cascade:piqp", "cascade:clarabel"])
-def test_every_backend_solves_a_stack_with_joints_at_their_limits(solver):
+def test_every_backend_solves_a_stack_with_joints_at_their_limits(rov, solver):
     joints = np.array([0.0, 3.8, 1.0, 6.2])  # two joints exactly at a limit, one at the other
-    q = ROV.configuration(np.zeros(6), joints)
-    target = ROV.frame_pose(q, "tool")[:3, 3] + [0.1, 0.0, 0.0]
+    q = rov.configuration(np.zeros(6), joints)
+    target = rov.frame_pose(q, "tool")[:3, 3] + [0.1, 0.0, 0.0]
     stack = Stack(levels=[Level(EndEffectorTask(position=list(target), gain=1.0)),
                           Level(JointLimitTask(mode="gradient", gain=GAIN))])
-    result = Controller(ROV, stack, solver=solver, dt=0.05).step(ROV.state(q), 0.0)
+    result = Controller(rov, stack, solver=solver, dt=0.05).step(rov.state(q), 0.0)
     assert result.ok, result.summary()
     assert np.all(np.isfinite(result.zeta))
     assert result.step_time < 5.0
     # the tool level is met; the joints at their limits are driven back inside
     assert result.level_violations[0] < 1e-5, result.summary()
-    qd = result.zeta[ROV.n_vehicle:]
+    qd = result.zeta[rov.n_vehicle:]
     assert qd[0] > 0 and qd[1] < 0 and qd[3] < 0
 
 
-def test_margin_rows_on_a_joint_subset_and_outside_the_limits():
+def test_margin_rows_on_a_joint_subset_and_outside_the_limits(rov):
     task = JointLimitTask(mode="margin", margin=0.1, gain=1.5,
-                          joints=["axis_b", "axis_e"]).bind(ROV)
+                          joints=["axis_b", "axis_e"]).bind(rov)
     idx = task.joint_indices
-    lo_lim, hi_lim = ROV.joint_lower[idx], ROV.joint_upper[idx]
+    lo_lim, hi_lim = rov.joint_lower[idx], rov.joint_upper[idx]
     rng = np.random.default_rng(14)
-    span = ROV.joint_upper - ROV.joint_lower
+    span = rov.joint_upper - rov.joint_lower
     for _ in range(10):
-        eta, _ = ROV.split(ROV.random_configuration(rng))
-        joints = rng.uniform(ROV.joint_lower - 0.2 * span, ROV.joint_upper + 0.2 * span)
-        state = ROV.state(ROV.configuration(eta, joints))
+        eta, _ = rov.split(rov.random_configuration(rng))
+        joints = rng.uniform(rov.joint_lower - 0.2 * span, rov.joint_upper + 0.2 * span)
+        state = rov.state(rov.configuration(eta, joints))
         rows = task.rows(state)
         q = state.joints[idx]
         np.testing.assert_allclose(rows.lower, 1.5 * (lo_lim + 0.1 - q), rtol=1e-14)

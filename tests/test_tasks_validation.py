@@ -350,13 +350,13 @@ SPATIAL = re.escape(SPATIAL_MESSAGE)
 
 
 @pytest.fixture(scope="module")
-def spatial():
-    return load_model("bluerov2_heavy_alpha5")
+def spatial(rov):
+    return rov
 
 
 @pytest.fixture(scope="module")
-def planar():
-    return load_model("soylu_planar")
+def planar(models):
+    return models["soylu_planar"]
 
 
 @pytest.mark.parametrize(

@@ -25,11 +25,11 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_time
+from ..controller import StepResult, not_a_state
 from ..errors import InputError, NonFiniteError
 from ..hqp import Status
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..controller import StepResult
     from ..model import Model, State
 
 
@@ -119,8 +119,6 @@ class Scheme(ABC):
         if self.model is None:
             raise InputError(f"{self.name}: call bind(model, dt) before step()")
         if not hasattr(state, "model"):
-            from ..controller import not_a_state
-
             raise not_a_state(state)
         if self.needs_trajectory and self.trajectory is None:
             raise InputError(f"{self.name}: no trajectory set; call track(trajectory) first")
@@ -150,8 +148,6 @@ def _make_result(
     closed-form scheme knows no hard bounds); ``task_residuals`` and ``task_errors`` report the
     scheme's own task error norms with their units, all in one level.
     """
-    from ..controller import StepResult
-
     z = np.asarray(zeta, dtype=np.float64)
     n = z.shape[0]
     return StepResult(

@@ -26,17 +26,17 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .._validation import FloatArray
 from ..errors import ConfigError
+from ..schemes import build_scheme
 from ._files import write_atomic
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .runner import SimulationResult
-    from .scenario import Scenario
+from .results import write_results
+from .runner import SimulationResult, simulate
+from .scenario import Scenario, load_scenario
 
 #: Rows of the comparison table: (metric key, unit, format).
 TABLE_METRICS: tuple[tuple[str, str], ...] = (
@@ -208,8 +208,6 @@ class Comparison:
         Every file is written atomically (mode 0644); a path there that is a symbolic link is
         replaced, not followed.
         """
-        from .results import write_results
-
         directory = Path(out_dir)
         directory.mkdir(parents=True, exist_ok=True)
         written = []
@@ -313,10 +311,6 @@ def compare(
     Raises:
         ConfigError: invalid scenario, or a scheme name that is unknown or not in the scenario.
     """
-    from ..schemes import build_scheme
-    from .runner import simulate
-    from .scenario import Scenario, load_scenario
-
     base = source if isinstance(source, Scenario) else load_scenario(source)
     names = list(base.schemes)
     if schemes is not None:
