@@ -29,7 +29,7 @@ from .measure import Certify, clip_to_box, evaluate
 from .problem import Problem
 from .registry import SolverSpec, available_solvers, get_spec
 from .result import OK_STATUSES, HierarchyResult, Status
-from .validate import Validator
+from .validate import Validator, check_magnitude
 
 
 def make_backend(spec: SolverSpec, options: dict[str, Any]) -> Backend:
@@ -162,6 +162,7 @@ class HierarchySolver:
         W = self._metric
         if W is None or W.shape[0] != n or src != self._metric_src:
             W = as_vector(raw, "weights", n, positive=True).copy()  # never the caller's array
+            check_magnitude(W, "weights", weights=True)
             self._metric, self._metric_src = W, src
         return W
 

@@ -58,6 +58,8 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("step_time_median_us", "us"),
     ("nan_steps", ""),
     ("unproven_steps", ""),
+    ("stage_counts", "steps"),
+    ("status_counts", "steps"),
 )
 
 #: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).
@@ -238,9 +240,11 @@ class Comparison:
 
 
 def format_value(value: Any) -> str:
-    """Compact text of a metric value for tables."""
+    """Compact text of a metric value for tables (counts: ``primary 598, alternate 2``)."""
     if value is None:
         return "-"
+    if isinstance(value, dict):
+        return ", ".join(f"{key} {format_value(count)}" for key, count in value.items())
     if isinstance(value, bool | int | np.integer):
         return str(int(value))
     if isinstance(value, float | np.floating):
