@@ -386,7 +386,7 @@ class Certifier:
         # settled by the level's own dual below
         loose: list[bool] = [False] * len(unmet)
         if unboxed is not None:
-            loose = [bool(v) for v in (absR[:, unboxed] > 0.0).any(axis=1)]
+            loose = [bool(v) for v in np.any(absR[:, unboxed] > 0.0, axis=1).tolist()]
         dfl, frl = df.tolist(), freeze.tolist()
         out = {}
         opt_tol = self.opt_tol
