@@ -174,9 +174,11 @@ class Stack:
         return self
 
     def reset(self) -> None:
-        """Reset every task's run-time memory."""
+        """Reset every task's and constraint's run-time memory."""
         for t in self.tasks:
             t.reset()
+        for c in self.constraints:
+            c.reset()
 
     def describe(self) -> str:
         """A readable listing of levels, tasks and constraints."""
