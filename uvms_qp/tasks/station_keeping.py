@@ -48,6 +48,8 @@ class StationKeepingTask(ErrorTask):
         gain: Gain K [1/s], scalar or per coordinate.
         weight: Weight within the level.
         name: Task name (default ``"station_keeping"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "station_keeping"
@@ -65,8 +67,9 @@ class StationKeepingTask(ErrorTask):
         gain: float | list[float] = 1.0,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain)
+        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
         self._axes_arg = None if axes is None else parse_axes(axes, _ALL, f"{self.name}.axes")
         self.hold = check_choice(hold, ("activation", "current"), f"{self.name}.hold")
         if blend is not None and (not isinstance(blend, str) or not blend):
@@ -135,7 +138,7 @@ class StationKeepingTask(ErrorTask):
                              "in mode 'shaping'")
         self._blend_task = other
 
-    def reset(self) -> None:
+    def _reset(self) -> None:
         """Forget the activation pose (a new one is taken at the next evaluation)."""
         self._set_point(self._target_arg)
 
