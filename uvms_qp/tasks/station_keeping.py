@@ -36,7 +36,10 @@ class StationKeepingTask(ErrorTask):
 
     Args:
         axes: Coordinates to hold, from ``x, y, z, phi, theta, psi`` (planar ``x, y, psi``);
-            default ``x, y, z, psi`` (planar ``x, y, psi``). Roll/pitch only if actuated.
+            default: the whole pose the vehicle controls, ``x, y, z, psi`` plus ``phi`` and
+            ``theta`` when roll and pitch are actuated (planar ``x, y, psi``): an actuated
+            attitude left free is one a lower-priority wish may tilt. Roll/pitch only if
+            actuated.
         target: Set point for the selected coordinates [m, rad], or None (see ``hold``).
         pose: Alternatively the set point as a vehicle pose in the world frame
             (``pinocchio.SE3``, 4x4 homogeneous matrix or ``{"xyz", "rpy"}``); its selected
@@ -91,7 +94,9 @@ class StationKeepingTask(ErrorTask):
             raise InputError(f"{self.name}: model {model.name!r} has a fixed base; station keeping "
                              "needs a vehicle")
         if self._axes_arg is None:
-            axes = ["x", "y", "psi"] if model.vehicle_kind == "planar" else ["x", "y", "z", "psi"]
+            axes = (["x", "y", "psi"] if model.vehicle_kind == "planar" else
+                    ["x", "y", "z", *(a for a in ("phi", "theta")
+                                      if _ACTUATOR[a] in model.actuated), "psi"])
         else:
             axes = self._axes_arg
         for a in axes:
