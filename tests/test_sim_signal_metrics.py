@@ -33,13 +33,15 @@ def test_noise_below_one_percent_of_the_bound_is_not_a_reversal():
     rng = np.random.default_rng(1)
     z = np.concatenate([np.full(5, 0.2), rng.uniform(-0.0049, 0.0049, 40), np.full(5, 0.2)])
     assert command_reversals(z[:, None], np.array([0.5]))[0] == 0
-    z[25] = -0.2  # one real excursion: out and back
+    z[24:27] = [0.2, -0.2, 0.2]  # one real kick: there and back
     assert command_reversals(z[:, None], np.array([0.5]))[0] == 2
 
 
-def test_a_sign_change_through_the_dead_band_counts_once():
-    z = np.array([0.3, 0.2, 0.001, -0.002, 0.0, -0.1, -0.3])[:, None]
-    assert command_reversals(z, np.array([0.3]))[0] == 1
+def test_a_change_of_direction_through_small_commands_is_not_a_reversal():
+    smooth = np.array([0.3, 0.2, 0.001, -0.002, 0.0, -0.1, -0.3])[:, None]
+    assert command_reversals(smooth, np.array([0.3]))[0] == 0
+    abrupt = np.array([0.3, 0.2, -0.1, -0.3])[:, None]
+    assert command_reversals(abrupt, np.array([0.3]))[0] == 1
 
 
 def test_axis_bounds_use_the_finite_sides_or_the_signal():

@@ -20,10 +20,10 @@ commands for ``k = 0..N-1``), independently of the controller's own diagnostics:
 - ``command_reversals_per_s`` (by entry of zeta), ``command_reversals_per_s_max`` and
   ``command_reversals_worst_axis`` [1/s]: how often each entry of the command reverses, counted
   after the start-up transient (the first :data:`TRANSIENT` seconds) and divided by the time
-  counted. A reversal is a change of sign between two commands that are both above
-  :data:`REVERSAL_THRESHOLD` of the entry's bound (:func:`axis_bounds`), with any number of
-  smaller commands between them: noise around zero is not a reversal, a command that bangs
-  between its bounds reverses every step (1 / dt per second);
+  counted. A reversal is a change of sign from one command to the next with both commands
+  above :data:`REVERSAL_THRESHOLD` of the entry's bound (:func:`axis_bounds`): noise around zero
+  is not a reversal, nor is a smooth change of direction (it passes through the small values),
+  while a command that bangs between its bounds reverses every step (1 / dt per second);
 - ``command_change_max`` [m/s^2, rad/s^2] (by unit): the largest ``|zeta_k - zeta_{k-1}| / dt``
   of the entries of each unit, from rest (``zeta_{-1} = 0``): what the vehicle's thrusters and
   the arm's actuators would have to deliver;
@@ -104,20 +104,19 @@ def command_reversals(zeta: FloatArray, bounds: FloatArray,
                       threshold: float = REVERSAL_THRESHOLD) -> NDArray[np.int64]:
     """Number of reversals of each entry of the command (nv,).
 
-    A reversal: two commands of opposite signs, both above ``threshold * bounds`` in magnitude,
-    with only commands at or below it between them (a comparator with hysteresis).
+    A reversal: two consecutive commands of opposite signs, both above ``threshold * bounds``
+    in magnitude.
 
     Args:
         zeta: Commands (N, nv).
         bounds: Bound of each entry (nv,) (:func:`axis_bounds`).
-        threshold: Fraction of the bound a command must exceed to count.
+        threshold: Fraction of the bound a command must exceed on both sides.
     """
-    counts = np.zeros(zeta.shape[1], dtype=np.int64)
-    for i in range(zeta.shape[1]):
-        column = zeta[:, i]
-        signs = np.sign(column[np.abs(column) > threshold * bounds[i]])
-        counts[i] = np.count_nonzero(signs[1:] != signs[:-1])
-    return counts
+    if zeta.shape[0] < 2:
+        return np.zeros(zeta.shape[1], dtype=np.int64)
+    large = np.abs(zeta) > threshold * bounds
+    flips = (np.sign(zeta[1:]) * np.sign(zeta[:-1]) < 0) & large[1:] & large[:-1]
+    return np.asarray(flips.sum(axis=0), dtype=np.int64)
 
 
 def reversal_metrics(result: SimulationResult, steps: NDArray[np.bool_]) -> dict[str, Any]:
