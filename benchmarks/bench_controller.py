@@ -160,30 +160,25 @@ def main() -> None:
     o_med, o_p99 = stats(t_ours[10:])
     s_med, s_p99 = stats(t_small[10:])
     p_med, p_p99 = stats(t_pink[10:])
-    # split of our step at a fixed state: state update, rows + bounds, solve, result
+    # split of our step at a fixed state: state update, rows + bounds, ladder (DAQP, measurement,
+    # hierarchy result), step result
     state = model.state(q0)
-    parts = {"state": [], "rows+bounds": [], "in-place solve": [], "result": [],
-             "general path solve (reference)": []}
-    inplace = ctrl._inplace
+    parts: dict[str, list[float]] = {"state": [], "rows+bounds+checks": [], "ladder": [],
+                                     "step result": []}
+    assembler, safe = ctrl.assembler, ctrl.safe
     for _ in range(500):
         start = time.perf_counter()
         model.state(q0)
         parts["state"].append(time.perf_counter() - start)
         start = time.perf_counter()
-        ctrl._fill(state, 0.0)
-        ctrl._fill_box(state)
-        parts["rows+bounds"].append(time.perf_counter() - start)
-        if inplace is not None:
-            start = time.perf_counter()
-            solved = inplace.solve()
-            parts["in-place solve"].append(time.perf_counter() - start)
-            if solved is not None:
-                start = time.perf_counter()
-                ctrl._inplace_result(solved, 0.0, start)
-                parts["result"].append(time.perf_counter() - start)
+        assembler.fill(state, 0.0)
+        parts["rows+bounds+checks"].append(time.perf_counter() - start)
         start = time.perf_counter()
-        ctrl._safe.solve(ctrl._new_problem())
-        parts["general path solve (reference)"].append(time.perf_counter() - start)
+        out = safe.solve(assembler.problem)
+        parts["ladder"].append(time.perf_counter() - start)
+        start = time.perf_counter()
+        assembler.step_result(out, 0.0, 0.0, "hqp", ctrl.solver_name)
+        parts["step result"].append(time.perf_counter() - start)
     parts = {k: v for k, v in parts.items() if v}
     print(f"model {model.name}, nv {model.nv}, {args.steps} interleaved steps, dt {DT} s")
     print(f"uvms-qp ({args.solver}, 4 levels, {sum(t.dim for t in ctrl.tasks)} task rows, "
@@ -227,9 +222,10 @@ def print_breakdown(model, ctrl, q0, reps, step=False):
     """
     rng = np.random.default_rng(0)
     qs = [model.random_configuration(rng) for _ in range(32)]
-    slots = list(ctrl._slots)
+    assembler = ctrl.assembler
+    slots = list(assembler._slots)
     dt = ctrl.dt
-    box_cons = list(ctrl._dynamic_box)
+    box_cons = list(assembler._dynamic_box)
     lower, upper = np.empty(model.nv), np.empty(model.nv)
     samples = {"state": [], "state+rows+bounds": []}
     samples.update({f"task {t.name} ({type(t).__name__})": [] for t, *_ in slots})
@@ -242,8 +238,7 @@ def print_breakdown(model, ctrl, q0, reps, step=False):
         samples["state"].append(clock() - start)
         start = clock()
         state = model.state(q)
-        ctrl._fill(state, 0.0)
-        ctrl._fill_box(state)
+        assembler.fill(state, 0.0)
         samples["state+rows+bounds"].append(clock() - start)
         for task, A, lo, hi in slots:
             start = clock()

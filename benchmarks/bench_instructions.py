@@ -15,7 +15,11 @@ so a different ``N`` measures a different stretch of it.
 Needs valgrind (Debian: ``apt-get install valgrind``) and Pink (``pip install -e ".[pink]"``).
 Each loop takes about a minute under valgrind.
 
-    python benchmarks/bench_instructions.py [--ticks 2000] [--warmup 50]
+    python benchmarks/bench_instructions.py [--ticks 2000] [--warmup 50] [--parts]
+
+``--parts`` first splits our tick (at the states of the closed loop's first ``W`` ticks, then held):
+``model.state``, the assembler's rows, box, weights and checks, the fallback ladder (DAQP,
+measurement, the hierarchy result) and the step result, cumulatively.
 """
 
 from __future__ import annotations
@@ -35,6 +39,13 @@ LOOPS = {
     "small": "uvms-qp, Pink's content (tool + posture, 1 level)",
     "pink": "Pink, FrameTask + PostureTask + limits",
 }
+#: cumulative parts of our tick, for ``--parts`` (each loop runs the previous one and more)
+PARTS = {
+    "state": "model.state(q)",
+    "fill": "+ rows, box, weights, checks (assembler.fill)",
+    "solve": "+ fallback ladder: DAQP, measurement, result (safe.solve)",
+    "step": "+ StepResult (the whole step: controller.step)",
+}
 
 
 def run_loop(which: str, warmup: int, ticks: int) -> None:
@@ -47,6 +58,22 @@ def run_loop(which: str, warmup: int, ticks: int) -> None:
     model = load_model("bluerov2_heavy_alpha5")
     q0 = model.home()
     traj = bc.Circle(model.frame_pose(q0, "tool")[:3, 3])
+    if which in PARTS:
+        # the first ticks of the full loop give realistic states; then one part per tick
+        tick, _, box, ctrl = bc.ours_stepper(model, q0, traj, "daqp")
+        for k in range(warmup):
+            tick(k)
+        q, assembler, safe = box["q"], ctrl.assembler, ctrl.safe
+        for k in range(ticks):
+            state = model.state(q)
+            t = (warmup + k) * bc.DT
+            if which == "step":
+                ctrl.step(state, t)
+            elif which != "state":
+                assembler.fill(state, t)
+                if which == "solve":
+                    safe.solve(assembler.problem)
+        return
     if which == "pink":
         tick = bc.pink_stepper(model, q0, traj, "daqp")[0]
     else:
@@ -75,13 +102,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=int, default=2000, help="counted ticks per loop")
     parser.add_argument("--warmup", type=int, default=50, help="ticks before counting")
-    parser.add_argument("--run", choices=sorted(LOOPS), help=argparse.SUPPRESS)
+    parser.add_argument("--parts", action="store_true",
+                        help="also split our tick into state, rows, ladder and result")
+    parser.add_argument("--run", choices=sorted({*LOOPS, *PARTS}), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.run:
         run_loop(args.run, args.warmup, args.ticks)
         return
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind not found: install it (Debian: apt-get install valgrind)")
+    if args.parts:
+        previous = 0.0
+        for which, label in PARTS.items():
+            base = count(which, args.warmup, 0)
+            total = (count(which, args.warmup, args.ticks) - base) / args.ticks
+            print(f"{label:<60} {total / 1e3:9.1f} k cumulative, {(total - previous) / 1e3:9.1f} k")
+            previous = total
     per_tick = {}
     for which, label in LOOPS.items():
         base = count(which, args.warmup, 0)

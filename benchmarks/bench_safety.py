@@ -1,68 +1,160 @@
-"""Cost of the reliability layer on the happy path (verification, saturation, stage bookkeeping).
+"""The fault matrix: every step path under every back-end fault, and how the run recovers.
 
-Solves the same problems (the demo stack at states of a short closed loop) with the bare
-:class:`uvms_qp.hqp.HierarchySolver` and with :class:`uvms_qp.safety.SafeSolver` (same back-end)
-interleaved, and prints the medians and the overhead per step.
+For each path (the default DAQP path faulted at its C binding and at the back-end object, a
+qpsolvers cascade, the weighted scheme, the closed-form null-space scheme), a controller is
+stepped along the states of a clean closed-loop run of the same controller; during step ``K``
+every call of the primary back-end (or of DAQP's binding) fails in one way
+(:class:`uvms_qp.testing.faults.Fault`); afterwards it behaves. Printed per path and fault: the
+stage and status of the faulted step, whether its command is finite and inside the box with
+the hard rows held (``safe``), and ``recovery``: the number of steps after the fault until the
+stage is ``primary`` again with the clean command (to 1e-7). A second table takes every
+back-end down (primary and alternate raise) for six steps: the stages the ladder walks through,
+and the recovery once the back-ends answer again.
 
-Run: ``python benchmarks/bench_safety.py``.
+The slowness fault advances a fake clock (no real sleep) past a 50 ms deadline, so the run
+does not depend on the machine's speed.
+
+Run: ``python benchmarks/bench_safety.py [--steps 30] [--at 12]``.
 """
 
 from __future__ import annotations
 
-import time
+import argparse
+from typing import Any
 
 import numpy as np
 
+from uvms_qp.bench.stacks import demo_stack, tool_posture_stack
 from uvms_qp.controller import Controller
-from uvms_qp.hqp import HierarchySolver
-from uvms_qp.safety import SafeSolver
-from uvms_qp.safety.verify import verify_result
-from uvms_qp.sim.scenario import load_scenario
+from uvms_qp.hqp.certificate import certify, problem_arrays
+from uvms_qp.model import load_model
+from uvms_qp.tasks import EndEffectorTask
+from uvms_qp.testing.faults import Fault, inject
+
+PATHS: dict[str, dict[str, Any]] = {
+    "hqp/daqp @binding": {"solver": "daqp", "at": "binding"},
+    "hqp/daqp @backend": {"solver": "daqp"},
+    "hqp/cascade:quadprog": {"solver": "cascade:quadprog"},
+    "weighted/cascade:daqp": {"solver": "daqp", "scheme": "weighted"},
+    "nullspace (closed form)": {"scheme": "nullspace", "stack": "equality"},
+}
 
 
-def main(rounds: int = 3000) -> None:
-    sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric)
-    q = np.array(sc.q0)
-    problems = []
-    for k in range(50):
-        res = ctrl.step(sc.model.state(q), k * sc.dt)
-        problems.append(ctrl._new_problem())  # views: copy the arrays of this tick
-        problems[-1] = _copy(problems[-1])
-        q = sc.model.integrate(q, res.zeta, sc.dt)
-    bare = HierarchySolver("daqp", sc.metric)
-    safe = SafeSolver("daqp", sc.metric)
-    t_bare, t_safe, t_check = [], [], []
-    for i in range(rounds):
-        p = problems[i % len(problems)]
-        t0 = time.perf_counter()
-        r = bare.solve_problem(p)
-        t1 = time.perf_counter()
-        safe.solve(p, t1)
-        t2 = time.perf_counter()
-        verify_result(p, r, 1e-9 * p.hard_scale)
-        t3 = time.perf_counter()
-        t_bare.append(t1 - t0)
-        t_safe.append(t2 - t1)
-        t_check.append(t3 - t2)
-    mb, ms, mc = (float(np.median(t)) * 1e6 for t in (t_bare, t_safe, t_check))
-    print(f"demo stack, daqp, {rounds} solves (medians):")
-    print(f"  HierarchySolver.solve_problem   {mb:8.1f} us")
-    print(f"  SafeSolver.solve                {ms:8.1f} us  (overhead {ms - mb:+.1f} us)")
-    print(f"  verify_result (incl. saturate)  {mc:8.1f} us")
-    print(f"  stages: {dict(safe.stage_counts)}")
+class Clock:
+    """A fake clock: the SLEEP fault advances it instead of sleeping."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+    def advance(self, seconds: float) -> None:
+        self.now += seconds
 
 
-def _copy(problem):
-    from dataclasses import replace
+def _certified(problem: Any, x: Any) -> int | None:
+    """The library's optimality certificate, as the measurement asks it."""
+    return certify(*problem_arrays(problem), x).first_failure
 
-    from uvms_qp.hqp.problem import Block
 
-    def cb(b):
-        return Block(b.A.copy(), b.lo.copy(), b.hi.copy(), b.w.copy(), b.eq.copy(), b.names)
+def _controller(model: Any, path: dict[str, Any], clock: Clock | None = None) -> Controller:
+    target = [0.55, 0.12, 0.05]
+    stack = (tool_posture_stack(EndEffectorTask(position=target, gain=1.0))
+             if path.get("stack") == "equality" else demo_stack(position=target))
+    ctrl = Controller(model, stack, solver=path.get("solver", "daqp"), dt=0.05,
+                      scheme=path.get("scheme", "hqp"), deadline=0.05)
+    if clock is not None:
+        ctrl.safe.clock = clock
+    return ctrl
 
-    return replace(problem, levels=tuple(cb(b) for b in problem.levels), hard=cb(problem.hard),
-                   lower=problem.lower.copy(), upper=problem.upper.copy())
+
+def run(path_name: str, fault: Fault, steps: int, at: int,
+        certified: bool = False) -> tuple[str, str, bool, str]:
+    model = load_model("bluerov2_heavy_alpha5")
+    path = PATHS[path_name]
+    clean = _controller(model, path)
+    q = model.home()
+    states, zetas = [], []
+    for k in range(steps):
+        states.append(q)
+        res = clean.step(model.state(q), 0.05 * k)
+        zetas.append(res.zeta)
+        q = model.integrate(q, res.zeta, 0.05)
+    clock = Clock()
+    ctrl = _controller(model, path, clock)
+    if certified:
+        ctrl.safe.primary.certify = _certified
+    injector = inject(ctrl, fault, at=path.get("at", "backend"), sleep=0.08)
+    injector.sleeper = clock.advance
+    faulted = None
+    recovery = "-"
+    for k, q in enumerate(states):
+        injector.armed = k == at
+        res = ctrl.step(model.state(q), 0.05 * k)
+        if k == at:
+            faulted = res
+        elif k > at and recovery == "-" and res.stage == "primary" and (
+                np.max(np.abs(res.zeta - zetas[k])) <= 1e-7):
+            recovery = str(k - at)
+    assert faulted is not None
+    safe = bool(np.all(np.isfinite(faulted.zeta)) and np.all(faulted.zeta >= faulted.lower)
+                and np.all(faulted.zeta <= faulted.upper) and faulted.bound_violation <= 1e-9)
+    stage = faulted.stage + (" (late)" if faulted.deadline_missed else "")
+    return stage, faulted.status.value, safe, recovery
+
+
+def all_down(path_name: str, steps: int, at: int, down: int = 6) -> tuple[list[str], str]:
+    """Stages of steps ``at .. at + down`` with every back-end raising, and the recovery."""
+    model = load_model("bluerov2_heavy_alpha5")
+    path = PATHS[path_name]
+    clean = _controller(model, path)
+    q = model.home()
+    states, zetas = [], []
+    for k in range(steps):
+        states.append(q)
+        res = clean.step(model.state(q), 0.05 * k)
+        zetas.append(res.zeta)
+        q = model.integrate(q, res.zeta, 0.05)
+    ctrl = _controller(model, path)
+    injectors = [inject(ctrl, Fault.RAISE_FOREIGN, at=path.get("at", "backend"))]
+    if ctrl.safe.alternate is not None:
+        injectors.append(inject(ctrl.safe.alternate, Fault.RAISE_FOREIGN))
+    stages, recovery = [], "-"
+    for k, q in enumerate(states):
+        for injector in injectors:
+            injector.armed = at <= k < at + down
+        res = ctrl.step(model.state(q), 0.05 * k)
+        assert np.all(np.isfinite(res.zeta)) and res.bound_violation <= 1e-9
+        if at <= k < at + down:
+            stages.append(res.stage)
+        elif k >= at + down and recovery == "-" and res.stage == "primary" and (
+                np.max(np.abs(res.zeta - zetas[k])) <= 1e-7):
+            recovery = str(k - at - down + 1)
+    return stages, recovery
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=30)
+    parser.add_argument("--at", type=int, default=12, help="faulted step")
+    args = parser.parse_args()
+    print(f"{'path':<26} {'fault':<16} {'stage':<22} {'status':<17} {'safe':<5} recovery")
+    for path_name in PATHS:
+        for fault in Fault:
+            stage, status, safe, recovery = run(path_name, fault, args.steps, args.at)
+            print(f"{path_name:<26} {fault.value:<16} {stage:<22} {status:<17} "
+                  f"{'yes' if safe else 'NO':<5} {recovery}")
+    print("\nwith the optimality certificate asked (uvms_qp.hqp.certificate):")
+    for path_name in PATHS:
+        stage, status, safe, recovery = run(path_name, Fault.FEASIBLE_WRONG, args.steps,
+                                            args.at, certified=True)
+        print(f"{path_name:<26} {'feasible_wrong':<16} {stage:<22} {status:<17} "
+              f"{'yes' if safe else 'NO':<5} {recovery}")
+    print(f"\nevery back-end down for 6 steps (from step {args.at}):")
+    for path_name in PATHS:
+        stages, recovery = all_down(path_name, args.steps, args.at)
+        print(f"{path_name:<26} {' > '.join(stages)}; recovery {recovery}")
 
 
 if __name__ == "__main__":

@@ -254,7 +254,7 @@ def test_controller_follows_per_tick_row_weights(rov):
     for joints in ([0.1, 1.9, 3.3, 3.1], [3.0, 0.2, 1.0, 6.0]):
         state = rov.state(rov.configuration(np.zeros(6), joints))
         ctrl.step(state)
-        np.testing.assert_allclose(ctrl._w[3:], damping.row_weights)
+        np.testing.assert_allclose(ctrl.assembler.problem.w[3:], damping.row_weights)
         np.testing.assert_allclose(ctrl.level_rows(state)[1].weights, damping.row_weights)
 
 
@@ -273,3 +273,95 @@ def test_non_finite_rows_name_the_task(rov):
                           Level(Broken(name="bad"))])
     with pytest.raises(NonFiniteError, match="'bad'"):
         Controller(rov, stack).step(rov.state(rov.home()))
+
+
+@pytest.mark.parametrize("solver", ["daqp", "cascade:quadprog"])
+@pytest.mark.parametrize("where", ["A_nan", "A_inf", "side_nan"])
+def test_non_finite_rows_name_the_task_and_the_next_tick_recovers(solver, where):
+    from uvms_qp.errors import NonFiniteError
+    from uvms_qp.model import load_model
+    from uvms_qp.stack import Level, Stack
+    from uvms_qp.tasks import EndEffectorTask, PostureTask
+
+    class Flaky(PostureTask):
+        broken = False
+
+        def error_rows(self, state, t):
+            J, e, ff = super().error_rows(state, t)
+            if self.broken:
+                J = np.array(J)
+                if where == "A_nan":
+                    J[0, -1] = np.nan
+                elif where == "A_inf":
+                    J[0, -1] = np.inf
+                else:
+                    e[0] = np.nan
+            return J, e, ff
+
+    model = load_model("bluerov2_heavy_alpha5")
+    flaky = Flaky(gain=0.5, name="flaky_posture")
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0.5, 0.1, 0.4], gain=1.0)),
+                          Level(flaky)])
+    ctrl = Controller(model, stack, solver=solver, dt=0.05)
+    state = model.state(model.neutral())
+    good = ctrl.step(state, 0.0)
+    flaky.broken = True
+    with pytest.raises(NonFiniteError, match="flaky_posture"):
+        ctrl.step(state, 0.05)
+    flaky.broken = False
+    again = ctrl.step(state, 0.1)
+    assert again.ok and again.stage == "primary"
+    np.testing.assert_allclose(again.zeta, good.zeta, atol=1e-9)
+
+
+@pytest.mark.parametrize("solver", ["daqp", "cascade:quadprog"])
+def test_weight_update_at_run_time_reaches_the_solver(solver):
+    """Two conflicting posture tasks in one level: the joint rates are their weighted mean."""
+    from uvms_qp.model import load_model
+    from uvms_qp.stack import Level, Stack
+    from uvms_qp.tasks import PostureTask
+
+    model = load_model("bluerov2_heavy_alpha5")
+    q = model.home()
+    joints = model.split(q)[1]
+    a = PostureTask(posture=(joints + 0.2).tolist(), gain=1.0, name="a")
+    b = PostureTask(posture=(joints - 0.2).tolist(), gain=1.0, name="b")
+    ctrl = Controller(model, Stack(levels=[Level(a, b)]), solver=solver, dt=0.05)
+    state = model.state(q)
+    nj = model.n_joints
+    for wa, wb in ((1.0, 1.0), (3.0, 1.0), (1.0, 4.0)):
+        a.update(weight=wa)
+        b.update(weight=wb)
+        result = ctrl.step(state, 0.0)
+        rates = result.zeta[-nj:]
+        # the reported level residual is the weighted one, with the new weights
+        ra, rb = rates - 0.2, rates + 0.2  # row values minus targets (K = 1)
+        weighted = np.sqrt(wa * ra @ ra + wb * rb @ rb)
+        assert result.hierarchy.level_residuals[0] == pytest.approx(weighted, rel=1e-9)
+        # the weighted compromise on every back-end (DAQP through per-row soft weights)
+        np.testing.assert_allclose(rates, (wa * 0.2 - wb * 0.2) / (wa + wb), atol=1e-7)
+
+
+@pytest.mark.parametrize("kwargs", [{"scheme": "nullspace"}, {"solver": "nullspace"},
+                                    {"scheme": "weighted", "solver": "nullspace"}])
+def test_equality_only_solvers_refuse_inequality_tasks_at_construction(rov, kwargs):
+    """The closed form cannot solve inequality rows: refused up front, naming the tasks, instead
+    of failing over to another back-end on every step."""
+    from uvms_qp.tasks import JointLimitTask
+
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0.5, 0.0, 0.0])),
+                          Level(JointLimitTask(mode="margin", name="limits"), PostureTask())])
+    with pytest.raises(InputError, match="inequality tasks: limits"):
+        Controller(rov, stack, **kwargs)
+
+
+def test_counts_of_stages_and_statuses(rov):
+    stack = Stack(levels=[Level(EndEffectorTask(position=[0.5, 0.1, 0.0])), Level(PostureTask())],
+                  constraints=[JointVelocityBounds()])
+    ctrl = Controller(rov, stack)
+    state = rov.state(rov.home())
+    for k in range(4):
+        ctrl.step(state, 0.05 * k)
+    assert ctrl.stage_counts == {"primary": 4}
+    assert sum(ctrl.status_counts.values()) == 4
+    assert set(ctrl.status_counts) <= {"optimal", "level_infeasible"}

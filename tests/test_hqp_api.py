@@ -11,7 +11,7 @@ from uvms_qp import (
     UnknownSolverError,
     solve_hierarchy,
 )
-from uvms_qp.hqp import HierarchySolver, Rows, Status, available_solvers
+from uvms_qp.hqp import HierarchySolver, Rows, Status, available_solvers, normalize_problem
 from uvms_qp.hqp.registry import SOLVERS, SolverSpec, get_spec
 
 QP = [s for s in available_solvers() if s != "nullspace"]
@@ -120,7 +120,7 @@ def test_daqp_weights_mean_what_they_mean_on_the_cascades():
     """An unmet level: DAQP minimises the weighted violation sum w_i s_i^2, like a cascade.
 
     Without per-row soft weights DAQP would return 0.5 here (it normalises rows: the compromise
-    of weights 1/|a_i|^2, whatever w); uvms_qp.hqp.daqp_weights gives it the weighted one.
+    of weights 1/|a_i|^2, whatever w); its per-row soft weights give it the weighted one.
     """
     A = np.array([[1.0, 0.0], [10.0, 0.0]])
     b = np.array([0.0, 10.0])  # x0 = 0 and 10 x0 = 10 conflict
@@ -214,11 +214,86 @@ def test_no_levels_gives_minimum_norm_point_of_box():
         ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, np.nan]}, NonFiniteError, "weights"),
         ([["not rows"]], {}, InputError, r"levels\[0\]\[0\]"),
         ("nope", {}, InputError, "levels"),
+        ([[(np.array([[1.0, np.inf]]), [1.0])]], {}, NonFiniteError, r"levels\[0\]\[0\]\.A"),
+        ([[(np.eye(2), [1.0, -np.inf])]], {}, NonFiniteError, r"levels\[0\]\[0\]\.b"),
+        ([[(np.eye(2), [np.nan, 0.0], [1.0, 1.0])]], {}, NonFiniteError, "lower"),
+        ([[(np.eye(2), [np.inf, 0.0], [np.inf, 1.0])]], {}, InputError, "lower side is"),
+        ([[(np.eye(2), [0.0, 0.0], [-np.inf, 1.0])]], {}, InputError, r"levels\[0\]\[0\]"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [0.0, np.nan]}, NonFiniteError, "lower"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [np.inf, 0.0]}, InputError, "lower bound"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"upper": [-np.inf, 0.0]}, InputError, "upper bound"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 2)), [1.0], [0.0])]}, BoundsError,
+         "hard"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 3)), [1.0])]}, ShapeError, "hard"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, 0.0]}, InputError, "weights"),
+        ([[Rows(np.eye(2), np.ones(2), np.ones(2), np.array([1.0, -1.0]), "t")]], {},
+         InputError, r"levels\[0\]\[0\] \(t\)\.weights"),
     ],
 )
-def test_bad_input(levels, kwargs, error, match):
+@pytest.mark.parametrize("reuse", [False, True])
+def test_bad_input(levels, kwargs, error, match, reuse):
+    """Every bad input names its culprit, also on a solver whose buffers hold a good problem."""
+    if "weights" in kwargs:  # the metric is checked against the problem's size at solve time
+        with pytest.raises(error, match=match):
+            solve_hierarchy(levels, **kwargs)
+        return
+    solver = HierarchySolver("daqp")
+    if reuse:
+        assert solver.solve([[(np.eye(2), [0.5, 0.5])]], -np.ones(2), np.ones(2)).ok
     with pytest.raises(error, match=match):
-        solve_hierarchy(levels, **kwargs)
+        solver.solve(levels, **kwargs)
+    assert solver.solve([[(np.eye(2), [0.5, 0.5])]], -np.ones(2), np.ones(2)).ok
+
+
+def test_metric_changed_in_place_is_noticed():
+    """The validated metric is cached, but an in-place change of the weights is honoured."""
+    W = np.array([1.0, 1.0])
+    solver = HierarchySolver("daqp", W)
+    level = [[(np.array([[1.0, 1.0]]), [1.0])]]
+    assert solver.solve(level).x == pytest.approx([0.5, 0.5], abs=1e-6)
+    W[0] = 3.0  # x0 three times as expensive: x = (0.25, 0.75)
+    assert solver.solve(level).x == pytest.approx([0.25, 0.75], abs=1e-6)
+    W[1] = -1.0
+    with pytest.raises(InputError, match="weights"):
+        solver.solve(level)
+
+
+def test_structure_changes_between_calls():
+    """Sizes, hard equality pattern and W change between calls: a reused solver gives each
+    problem the answer a fresh one gives."""
+    rng = np.random.default_rng(11)
+    solver = HierarchySolver("daqp")
+    for k in range(60):
+        n = 4 + k % 3
+        A1, b1 = rng.standard_normal((1 + k % 2, n)), rng.standard_normal(1 + k % 2)
+        Ah = rng.standard_normal((1, n))
+        hard = [(Ah, [0.1], [0.1 if k % 4 == 0 else 0.5])]  # equality on every 4th call
+        solver.weights = rng.uniform(0.5, 2.0, n) if k % 5 == 0 else None
+        levels = [[(A1, b1)], [(np.eye(n), np.zeros(n))]]
+        a = solver.solve(levels, -np.ones(n), np.ones(n), hard)
+        b = HierarchySolver("daqp", solver.weights).solve(levels, -np.ones(n), np.ones(n), hard)
+        assert a.status is b.status
+        np.testing.assert_allclose(a.x, b.x, atol=1e-7)
+
+
+def test_results_stay_valid_after_later_solves():
+    """A result owns its slacks and box: later solves on the same buffers do not change it."""
+    rng = np.random.default_rng(3)
+    solver = HierarchySolver("daqp")
+    kept = []
+    for _ in range(20):
+        levels = [[(rng.standard_normal((2, 5)), rng.standard_normal(2))],
+                  [(np.eye(5), rng.standard_normal(5))]]
+        box = (-np.full(5, 0.4), np.full(5, 0.4))
+        result = solver.solve(levels, *box)
+        kept.append((levels, box, result, result.slacks.copy(), result.active_upper.copy()))
+    for levels, box, result, slacks, active in kept:
+        again = normalize_problem(levels, *box)
+        z = again.A @ result.x
+        np.testing.assert_allclose(result.slacks, z - np.clip(z, again.lo, again.hi), atol=1e-12)
+        assert np.array_equal(result.slacks, slacks) and np.array_equal(result.active_upper,
+                                                                        active)
+        assert np.array_equal(result.box, np.stack(box))
 
 
 def test_unknown_solver_lists_installed():

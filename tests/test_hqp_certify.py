@@ -9,7 +9,7 @@ slab, computed here from the rows themselves.
 import numpy as np
 import pytest
 
-from uvms_qp.hqp.backends.certify import active_set_from, certified_point, certify
+from uvms_qp.hqp.kkt import active_set_from, certified_point, certify
 
 
 def projection_qp(rng, n=6):
@@ -117,7 +117,7 @@ def _failing_solver(exc):
     from uvms_qp.hqp import HierarchySolver
 
     solver = HierarchySolver("cascade:quadprog")
-    solver._backend._qpsolvers = _FailingQpsolvers(solver._backend._qpsolvers, exc)
+    solver.backend._qpsolvers = _FailingQpsolvers(solver.backend._qpsolvers, exc)
     return solver
 
 

@@ -9,9 +9,8 @@ it to the tolerance the registry states for it (``SolverSpec.agreement_tol``).
 import numpy as np
 import pytest
 
-from uvms_qp.hqp import HierarchySolver, Status, available_solvers
+from uvms_qp.hqp import HierarchySolver, Status, available_solvers, normalize_problem
 from uvms_qp.hqp.backends.nullspace import nullspace_solve
-from uvms_qp.hqp.problem import normalize_problem
 from uvms_qp.hqp.registry import get_spec
 
 N_PROBLEMS = 500

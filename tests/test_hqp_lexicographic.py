@@ -11,8 +11,7 @@ semantics (see docs/solver.md and test_hqp_api.py for weighted rows).
 import numpy as np
 import pytest
 
-from uvms_qp.hqp import HierarchySolver, available_solvers
-from uvms_qp.hqp.problem import normalize_problem
+from uvms_qp.hqp import HierarchySolver, available_solvers, normalize_problem
 
 N_PROBLEMS = 1000
 N_SLOW = 200

@@ -23,7 +23,6 @@ from uvms_qp.errors import (
     UvmsQpError,
 )
 from uvms_qp.hqp import HierarchySolver, Rows
-from uvms_qp.hqp.inplace import InPlaceDaqp
 from uvms_qp.sim import load_scenario
 
 SOLVERS = ["daqp", "nullspace", "cascade:quadprog"]
@@ -128,25 +127,26 @@ def test_known_options_are_accepted() -> None:
         np.testing.assert_allclose(result.x, [0.5, 0.5], atol=1e-7)
 
 
-# ------------------------------------------------------------------------------- InPlaceDaqp
+# ----------------------------------------------------------------------------- DAQP options
 
 
 @pytest.mark.parametrize(
-    ("kwargs", "culprit"),
+    ("options", "culprit"),
     [
-        ({"settings": 3}, "settings"),
-        ({"settings": {"bogus": 1.0}}, "bogus"),
+        (3, "options"),
+        ({"bogus": 1.0}, "bogus"),
         ({"level_tol": "x"}, "level_tol"),
         ({"hard_tol": float("nan")}, "hard_tol"),
         ({"hard_tol": -1.0}, "hard_tol"),
         ({"level_tol": 0.0}, "level_tol"),
         ({"rho_ladder": "x"}, "rho_ladder"),
         ({"rho_ladder": [-1.0]}, "rho_ladder"),
+        ({"primal_tol": "x"}, "primal_tol"),
     ],
 )
-def test_inplace_daqp_rejects_bad_settings(kwargs: dict[str, Any], culprit: str) -> None:
+def test_daqp_rejects_bad_options(options: Any, culprit: str) -> None:
     with pytest.raises(InputError, match=culprit):
-        InPlaceDaqp(2, 0, [1], **kwargs)
+        HierarchySolver("daqp", options=options)
 
 
 # ------------------------------------------------------------------------------------- model

@@ -39,14 +39,15 @@ def reference():
 
 
 def replay(qs, fault, *, start=K, count=1, armed=False, everything=False, strict=False,
-           deadline=None, sleep=0.05, times=None):
+           deadline=None, sleep=0.05, times=None, at="backend"):
     """Step a fresh demo controller along ``qs``; from step ``start`` the next ``count`` back-end
     calls fail (or, with ``armed``, every call during steps start..start+count-1 fails).
-    ``everything`` faults the alternate back-end as well."""
+    ``everything`` faults the alternate back-end as well; ``at="binding"`` faults DAQP's C
+    binding below the back-end instead of the back-end object."""
     sc = load_scenario("bluerov2_demo")
     ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric, strict=strict,
                       deadline=deadline)
-    wrappers = [inject(ctrl.safe.primary, fault, sleep=sleep)]
+    wrappers = [inject(ctrl, fault, sleep=sleep, at=at)]
     if everything:
         wrappers.append(inject(ctrl.safe.alternate, fault, sleep=sleep))
     out = []
@@ -66,7 +67,10 @@ def assert_safe(res):
     assert np.all(res.zeta >= res.lower) and np.all(res.zeta <= res.upper)
 
 
-@pytest.mark.parametrize("fault", [f for f in Fault if f is not Fault.SLEEP])
+DETECTABLE = [f for f in Fault if f not in (Fault.SLEEP, Fault.FEASIBLE_WRONG)]
+
+
+@pytest.mark.parametrize("fault", DETECTABLE)
 def test_one_failure_is_caught_and_leaves_no_trace(reference, fault):
     qs, zetas = reference
     results = replay(qs, fault)
@@ -80,6 +84,22 @@ def test_one_failure_is_caught_and_leaves_no_trace(reference, fault):
             assert res.stage == "primary"
         # the cold retry solves the same problem: same command; later steps unchanged
         assert np.max(np.abs(res.zeta - zetas[k])) <= 1e-7, (k, res.summary())
+
+
+@pytest.mark.parametrize("fault", DETECTABLE)
+def test_faults_below_the_default_back_end_are_caught(reference, fault):
+    """The default path (DAQP) faulted at its C binding, below the back-end object: every
+    step safe and truthful, and once the binding behaves the commands are the clean ones."""
+    qs, zetas = reference
+    results = replay(qs, fault, at="binding", count=3)
+    for k, res in enumerate(results):
+        assert_safe(res)
+        assert res.ok and res.bound_violation <= 1e-9, res.summary()
+        if k > K + 2:
+            assert res.stage == "primary"
+            assert np.max(np.abs(res.zeta - zetas[k])) <= 1e-7, (k, res.summary())
+    assert any(r.stage != "primary" or r.hierarchy.info.get("rho_soft") != 1e-8
+               for r in results[K:K + 3])
 
 
 @pytest.mark.parametrize("count, stages", [
@@ -150,3 +170,60 @@ def test_weighted_scheme_falls_back_to_a_weight_honouring_cascade(reference):
     res = ctrl.step(sc.model.state(qs[K]), K * sc.dt)
     assert res.stage == "alternate" and res.ok
     assert np.max(np.abs(res.zeta - clean.zeta)) <= 1e-5
+
+
+@pytest.mark.parametrize("scheme, solver", [("weighted", "daqp"), ("nullspace", "daqp"),
+                                            ("hqp", "cascade:quadprog")])
+@pytest.mark.parametrize("fault", [Fault.RAISE_FOREIGN, Fault.MEMORY, Fault.NONE,
+                                   Fault.WRONG_LENGTH, Fault.NAN_SUCCESS, Fault.WILD_FAILURE])
+def test_every_scheme_runs_under_the_same_guard(scheme, solver, fault):
+    """The weighted scheme, the closed form and a cascade: a faulted step gives a safe command
+    and a truthful status from another stage, and the next step is the clean one."""
+    from uvms_qp.bench.stacks import tool_posture_stack
+    from uvms_qp.model import load_model
+    from uvms_qp.tasks import EndEffectorTask
+
+    model = load_model("bluerov2_heavy_alpha5")
+
+    def controller():
+        stack = tool_posture_stack(EndEffectorTask(position=[0.55, 0.12, 0.05], gain=1.0))
+        return Controller(model, stack, solver=solver, dt=0.05, scheme=scheme)
+
+    clean, ctrl = controller(), controller()
+    q = model.home()
+    injector = inject(ctrl, fault)
+    for k in range(4):
+        state = model.state(q)
+        expected = clean.step(state, 0.05 * k)
+        injector.armed = k == 1
+        res = ctrl.step(state, 0.05 * k)
+        assert_safe(res)
+        assert res.bound_violation <= 1e-9
+        if k == 1:
+            assert res.stage != "primary" and res.attempts and res.ok, res.summary()
+        else:
+            assert res.stage == "primary"
+            np.testing.assert_allclose(res.zeta, expected.zeta, atol=1e-7)
+        q = model.integrate(q, expected.zeta, 0.05)
+
+
+@pytest.mark.parametrize("scheme", ["nullspace", "weighted", "hqp"])
+def test_a_slow_step_is_flagged_on_every_scheme(scheme):
+    """A 120 ms solve (on a fake clock) against a 50 ms deadline is flagged, on every scheme."""
+    from uvms_qp.bench.stacks import tool_posture_stack
+    from uvms_qp.model import load_model
+    from uvms_qp.tasks import EndEffectorTask
+
+    model = load_model("bluerov2_heavy_alpha5")
+    stack = tool_posture_stack(EndEffectorTask(position=[0.55, 0.12, 0.05], gain=1.0))
+    ctrl = Controller(model, stack, dt=0.05, scheme=scheme, deadline=0.05)
+    now = [0.0]
+    ctrl.safe.clock = lambda: now[0]
+    injector = inject(ctrl, Fault.SLEEP, count=1, sleep=0.12)
+    injector.sleeper = lambda seconds: now.__setitem__(0, now[0] + seconds)
+    state = model.state(model.home())
+    late = ctrl.step(state, 0.0)
+    assert late.deadline_missed and late.stage == "primary" and late.ok
+    assert late.step_time == pytest.approx(0.12)
+    again = ctrl.step(state, 0.05)
+    assert not again.deadline_missed

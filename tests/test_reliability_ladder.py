@@ -1,33 +1,45 @@
 """The fallback ladder on plain problems: every fault gives a safe command and a named stage.
 
-Faults are injected into the back-end (uvms_qp.testing.faults) so the whole path is exercised:
-back-end -> evaluation -> verification -> ladder -> saturation.
+Faults are injected into the back-end, or below the DAQP back-end at its C binding
+(uvms_qp.testing.faults), so the whole path is exercised: back-end -> measurement -> ladder ->
+final clip. Deadlines are tested with a fake clock, never with the machine's speed.
 """
 
 from __future__ import annotations
-
-import time
 
 import numpy as np
 import pytest
 
 from uvms_qp.errors import InputError, NoSolutionFound, UnknownSolverError
-from uvms_qp.hqp import Status, normalize_problem
+from uvms_qp.hqp import Status, hard_violation, normalize_problem
+from uvms_qp.hqp.measure import clip_to_box
 from uvms_qp.safety import (
     DEGRADED_STAGES,
     STAGES,
-    Deadline,
     SafeSolver,
     backend_limits,
     default_alternate,
     fallback_summary,
-    saturate,
-    verify_point,
-    verify_solution,
 )
 from uvms_qp.testing.faults import Fault, inject
 
 BOX = 0.3
+#: faults a measurement tells from an answer (a feasible wrong x needs a certificate)
+DETECTABLE = [f for f in Fault if f not in (Fault.SLEEP, Fault.FEASIBLE_WRONG)]
+
+
+class FakeClock:
+    """A clock that advances ``step`` seconds every time it is read, and on :meth:`advance`."""
+
+    def __init__(self, step: float = 0.0) -> None:
+        self.now, self.step = 0.0, step
+
+    def __call__(self) -> float:
+        self.now += self.step
+        return self.now
+
+    def advance(self, seconds: float) -> None:
+        self.now += seconds
 
 
 def _problem(seed: int = 0, n: int = 6, hard_rows: bool = True, box: float = BOX):
@@ -40,22 +52,27 @@ def _problem(seed: int = 0, n: int = 6, hard_rows: bool = True, box: float = BOX
 
 
 def _safe(problem, x, tol=1e-9):
-    assert np.all(np.isfinite(x))
-    assert np.all(x >= problem.lower) and np.all(x <= problem.upper)  # exactly, after saturation
-    return verify_point(problem, x, tol)
+    """Finite, inside the box exactly, hard rows within ``tol``."""
+    hard = problem.hard
+    return bool(np.all(np.isfinite(x)) and np.all(x >= problem.lower)
+                and np.all(x <= problem.upper)
+                and hard_violation(x, problem.lower, problem.upper, hard.A, hard.lower,
+                                   hard.upper) <= tol)
 
 
 @pytest.mark.parametrize("solver", ["daqp", "cascade:quadprog"])
-@pytest.mark.parametrize("fault", list(Fault))
+@pytest.mark.parametrize("fault", [*DETECTABLE, Fault.SLEEP])
 def test_every_fault_gives_a_verified_command_and_names_the_stage(solver, fault):
     problem = _problem(1)
     reference = SafeSolver(solver).solve(problem)
     assert reference.stage == "primary"
-    safe = SafeSolver(solver, deadline=0.1)  # generous: the machine may be loaded
-    wrapper = inject(safe.primary, fault, count=1, sleep=0.15)
+    clock = FakeClock()
+    safe = SafeSolver(solver, deadline=0.1, clock=clock)
+    injector = inject(safe, fault, count=1, sleep=0.15)
+    injector.sleeper = clock.advance  # a SLEEP fault takes 0.15 s of the fake clock
     out = safe.solve(problem)
-    assert wrapper.n_faults == 1
-    assert _safe(problem, out.x).ok
+    assert injector.n_faults == 1
+    assert _safe(problem, out.x)
     if fault is Fault.SLEEP:  # late but correct: used, and the miss is reported
         assert out.stage == "primary" and out.deadline_missed
     else:
@@ -65,14 +82,58 @@ def test_every_fault_gives_a_verified_command_and_names_the_stage(solver, fault)
     assert out.result.ok and out.result.status == reference.result.status
 
 
+@pytest.mark.parametrize("fault", [*DETECTABLE, Fault.SLEEP])
+def test_faults_below_the_daqp_back_end_give_a_verified_command(fault):
+    """Faults of DAQP's C binding: the back-end's own rho_soft ladder or the safe ladder
+    answers, truthfully; the next solve is the clean one."""
+    problem = _problem(1)
+    reference = SafeSolver("daqp").solve(problem)
+    clock = FakeClock()
+    safe = SafeSolver("daqp", clock=clock)
+    injector = inject(safe, fault, at="binding", count=1, sleep=0.15)
+    injector.sleeper = clock.advance
+    out = safe.solve(problem)
+    assert injector.n_faults == 1
+    assert _safe(problem, out.x) and out.result.ok
+    if fault in (Fault.RAISE_OWN, Fault.RAISE_FOREIGN, Fault.MEMORY):
+        assert out.stage == "cold_retry" and "raised" in out.attempts[0]
+    else:  # a claimed answer that fails the back-end's acceptance: its next rho_soft solves
+        assert out.stage == "primary"
+    assert np.allclose(out.x, reference.x, atol=1e-6)
+    again = safe.solve(problem)
+    assert again.stage == "primary" and np.allclose(again.x, reference.x, atol=1e-9)
+
+
+def test_a_certificate_plugs_into_the_measurement_and_the_ladder():
+    """A feasible but wrong x is believed unless a certificate is asked; with the library's
+    certificate the wrong answer is 'unproven' and the ladder takes the next stage."""
+    from uvms_qp.hqp.certificate import certify, problem_arrays
+
+    problem = _problem(2)
+    truth = SafeSolver("cascade:quadprog").solve(problem).result.level_residuals
+    safe = SafeSolver("daqp")
+    injector = inject(safe, Fault.FEASIBLE_WRONG, count=1)
+    believed = safe.solve(problem)
+    assert injector.n_faults == 1 and believed.stage == "primary"  # nothing to tell it by
+
+    safe = SafeSolver("daqp")
+    safe.primary.certify = lambda p, x: certify(*problem_arrays(p), x).first_failure
+    inject(safe, Fault.FEASIBLE_WRONG, count=1)
+    out = safe.solve(problem)
+    assert out.stage == "cold_retry" and "unproven" in out.attempts[0], out.attempts
+    assert out.result.ok and out.result.level_residuals == pytest.approx(truth, abs=1e-6)
+
+
 @pytest.mark.parametrize("fault, needle", [
     (Fault.RAISE_OWN, "SolverError"), (Fault.RAISE_FOREIGN, "RuntimeError"),
-    (Fault.NAN_SUCCESS, "no finite x"), (Fault.BOUND_VIOLATION, "box_violated (1.00e-01)"),
-    (Fault.WILD_FAILURE, "box_violated (1.00e+12)"),
+    (Fault.MEMORY, "MemoryError"), (Fault.NONE, "returned no x"),
+    (Fault.WRONG_LENGTH, "x of shape (7,), expected (6,)"),
+    (Fault.NAN_SUCCESS, "non-finite x"), (Fault.BOUND_VIOLATION, ") violated by"),
+    (Fault.WILD_FAILURE, "backend_error (injected failure"),
 ])
 def test_attempt_log_says_what_went_wrong(fault, needle):
     safe = SafeSolver("daqp")
-    inject(safe.primary, fault, count=1)
+    inject(safe, fault, count=1)
     out = safe.solve(_problem(2))
     assert needle in out.attempts[0]
 
@@ -87,11 +148,11 @@ def test_consecutive_failures_climb_down_the_ladder(times, stages):
     problem = _problem(3, box=10.0)
     reference = SafeSolver("daqp").solve(problem).x
     safe = SafeSolver("daqp")
-    inject(safe.primary, Fault.NAN_SUCCESS, count=times)
+    inject(safe, Fault.NAN_SUCCESS, count=times)
     got = []
     for _ in range(3):
         out = safe.solve(problem)
-        assert _safe(problem, out.x).ok
+        assert _safe(problem, out.x)
         assert np.allclose(out.x, reference, atol=1e-6)
         got.append(out.stage)
     assert got == stages
@@ -101,14 +162,13 @@ def test_all_back_ends_down_decays_then_holds_zero_then_recovers():
     problem = _problem(4)
     safe = SafeSolver("daqp", max_fallbacks=3, decay=0.5)
     first = safe.solve(problem)
-    primary = inject(safe.primary, Fault.RAISE_FOREIGN)
-    assert safe.alternate is not None
+    primary = inject(safe, Fault.RAISE_FOREIGN)
     alternate = inject(safe.alternate, Fault.WILD_FAILURE)
     primary.armed = alternate.armed = True
     stages, xs = [], []
     for _ in range(6):
         out = safe.solve(problem)
-        assert _safe(problem, out.x).ok
+        assert _safe(problem, out.x)
         assert out.result.status == Status.BACKEND_ERROR  # truthful: not a solve
         assert out.stage in DEGRADED_STAGES and out.stage in out.result.message
         stages.append(out.stage)
@@ -117,34 +177,50 @@ def test_all_back_ends_down_decays_then_holds_zero_then_recovers():
     for k in range(3):
         assert np.allclose(xs[k], first.x * 0.5 ** (k + 1))
     assert not np.any(xs[3]) and not np.any(xs[5])
-    # while holding zero only the primary is tried: one call per step
-    calls = primary.n_calls
+    # while holding zero the whole ladder is still tried: primary, cold retry, alternate
+    calls = (primary.n_calls, alternate.n_calls)
     safe.solve(problem)
-    assert primary.n_calls == calls + 1 and alternate.n_calls == 3
+    assert primary.n_calls >= calls[0] + 2 and alternate.n_calls == calls[1] + 1
     primary.armed = False
     out = safe.solve(problem)
     assert out.stage == "primary" and safe.consecutive == 0
     assert safe.stage_counts["hold_zero"] == 4
+    assert safe.status_counts["backend_error"] == 7
     assert "hold_zero: 4" in fallback_summary(safe.stage_counts)
+
+
+def test_hold_zero_ends_through_the_alternate_when_the_primary_stays_down():
+    """A primary that never solves (structurally unable) and an alternate down for a while:
+    the run holds zero, then recovers through the alternate, not only through the primary."""
+    problem = _problem(5)
+    safe = SafeSolver("daqp", max_fallbacks=2, relax=False)
+    safe.solve(problem)
+    inject(safe, Fault.RAISE_FOREIGN).armed = True
+    alternate = inject(safe.alternate, Fault.NAN_SUCCESS)
+    alternate.armed = True
+    stages = [safe.solve(problem).stage for _ in range(4)]
+    assert stages == ["decayed_previous"] * 2 + ["hold_zero"] * 2
+    alternate.armed = False
+    stages = [safe.solve(problem).stage for _ in range(3)]
+    assert stages == ["alternate"] * 3 and safe.consecutive == 0
 
 
 def test_relaxed_stage_drops_the_lowest_level_and_reports_the_full_problem():
     problem = _problem(5)
     safe = SafeSolver("daqp", alternate=None)
-    wrapper = inject(safe.primary, Fault.NAN_SUCCESS, calls=[0, 1])  # primary + cold retry
+    injector = inject(safe, Fault.NAN_SUCCESS, calls=[0, 1])  # primary + cold retry
     out = safe.solve(problem)
-    assert wrapper.n_faults == 2
+    assert injector.n_faults == 2
     assert out.stage == "relaxed" and out.relaxed_levels == 1
     assert len(out.result.level_residuals) == 2  # evaluated against the full problem
     assert "dropped" in out.result.message
-    assert _safe(problem, out.x).ok
+    assert _safe(problem, out.x)
 
 
 def test_strict_mode_raises_with_the_failed_result():
     safe = SafeSolver("daqp", strict=True)
-    primary = inject(safe.primary, Fault.BOUND_VIOLATION)
-    alternate = inject(safe.alternate, Fault.NAN_SUCCESS)
-    primary.armed = alternate.armed = True
+    inject(safe, Fault.BOUND_VIOLATION).armed = True
+    inject(safe.alternate, Fault.NAN_SUCCESS).armed = True
     with pytest.raises(NoSolutionFound, match="no verified solution") as info:
         safe.solve(_problem(6))
     assert info.value.result is not None
@@ -153,7 +229,7 @@ def test_strict_mode_raises_with_the_failed_result():
 
 def test_strict_mode_still_takes_the_non_degrading_stages():
     safe = SafeSolver("daqp", strict=True)
-    inject(safe.primary, Fault.RAISE_OWN, count=1)
+    inject(safe, Fault.RAISE_OWN, count=1)
     assert safe.solve(_problem(6)).stage == "cold_retry"
 
 
@@ -171,39 +247,37 @@ def test_empty_hard_set_goes_straight_to_zero_with_hard_infeasible():
 
 def test_deadline_skips_the_solver_stages_after_a_late_failure():
     problem = _problem(7)
-    safe = SafeSolver("daqp", deadline=0.01)
+    clock = FakeClock()
+    safe = SafeSolver("daqp", deadline=0.01, clock=clock)
     safe.solve(problem)
-    wrapper = inject(safe.primary, Fault.SLEEP, sleep=0.03)
-    wrapper.armed = True
+    inject(safe, Fault.SLEEP, count=1, sleep=0.03).sleeper = clock.advance
     out = safe.solve(problem)
     assert out.stage == "primary" and out.deadline_missed  # late, verified: used
     # late *and* wrong: no more solver stages; the cheap stages answer
-    safe2 = SafeSolver("daqp", deadline=0.01)
-    safe2.solve(problem)
-    late_nan = inject(safe2.primary, Fault.SLEEP)  # not armed: only the inner stand-in acts
-    real = late_nan.inner
-
-    class LateNaN:
-        def solve(self, p):
-            out = real.solve(p)
-            time.sleep(0.03)
-            out.x = np.full(p.n, np.nan)
-            return out
-
-    late_nan.inner = LateNaN()
-    start = time.perf_counter()
-    out = safe2.solve(problem)
+    clock.step = 0.02  # every clock read is 20 ms later: the answer comes past the deadline
+    injector = inject(safe, Fault.NAN_SUCCESS, count=1)
+    out = safe.solve(problem)
+    assert injector.n_faults == 1 and injector.n_calls == 1  # one back-end call, nothing more
     assert out.stage == "decayed_previous" and out.deadline_missed
     assert any("deadline passed" in a for a in out.attempts)
-    assert time.perf_counter() - start < 0.03 + 0.05  # one late call, nothing more
 
 
-def test_deadline_and_limits():
-    d = Deadline(0.5)
-    assert 0.0 < d.remaining() <= 0.5 and not d.expired()
-    assert Deadline(None).budget == np.inf
-    with pytest.raises(InputError, match="deadline"):
-        Deadline(-1.0)
+def test_deadline_bounds_a_slow_cascade():
+    """A cascade whose QPs each take 20 ms (fake clock) under a 50 ms deadline: the guard
+    refuses the QP that would start late, the step ends flagged, degraded, inside the box."""
+    problem = _problem(8)
+    clock = FakeClock()
+    safe = SafeSolver("cascade:quadprog", deadline=0.05, clock=clock)
+    assert safe.solve(problem).stage == "primary"
+    clock.step = 0.02
+    out = safe.solve(problem)
+    assert out.deadline_missed
+    assert any("deadline passed" in a for a in out.attempts)
+    assert out.stage in DEGRADED_STAGES
+    assert _safe(problem, out.x, 1e-9 * problem.hard_scale)
+
+
+def test_backend_limits():
     assert backend_limits("daqp", 0.01) == {"time_limit": 0.01}
     assert backend_limits("cascade:highs", 0.02) == {"time_limit": 0.02}
     assert backend_limits("cascade:quadprog", 0.02) == {}
@@ -218,31 +292,18 @@ def test_time_limits_reach_the_back_ends():
         assert out.stage == "primary", (solver, out.attempts)
 
 
-def test_saturation_reports_the_clip():
+def test_clip_reports_the_amount():
     lo, hi = np.array([-1.0, -1.0]), np.array([1.0, 1.0])
-    s = saturate(np.array([0.5, 1.5]), lo, hi)
-    assert s.x.tolist() == [0.5, 1.0] and s.clipped == 0.5 and s.flagged
-    s = saturate(np.array([0.5, 1.0 + 1e-12]), lo, hi)
-    assert s.x[1] == 1.0 and not s.flagged
-
-
-def test_verify_rejects_untruthful_statuses():
-    problem = _problem(9)
-    result = SafeSolver("daqp").primary.solve_problem(problem)
-    tol = 1e-9 * problem.hard_scale
-    assert verify_solution(problem, result, tol).ok
-    result.status = Status.BACKEND_ERROR
-    assert verify_solution(problem, result, tol).reason == "not_a_solution"
-    result.status = Status.OPTIMAL
-    result.x = result.x + 1.0
-    assert verify_solution(problem, result, tol).reason in ("box_violated", "hard_rows_violated")
-    result.x = np.zeros(problem.n + 1)
-    assert verify_solution(problem, result, tol).reason == "wrong_shape"
+    x, amount = clip_to_box(np.array([0.5, 1.5]), lo, hi)
+    assert x.tolist() == [0.5, 1.0] and amount == 0.5
+    x, amount = clip_to_box(np.array([0.5, 1.0 + 1e-12]), lo, hi)
+    assert x[1] == 1.0 and amount < 1e-11
 
 
 def test_alternates_and_construction_errors():
     assert default_alternate("daqp") == "cascade:quadprog"
     assert default_alternate("cascade:proxqp") == "daqp"
+    assert default_alternate("nullspace") == "daqp"
     assert default_alternate("cascade:daqp", cascade_only=True) == "cascade:quadprog"
     assert default_alternate("cascade:quadprog", cascade_only=True) == "cascade:proxqp"
     with pytest.raises(UnknownSolverError):
@@ -252,23 +313,3 @@ def test_alternates_and_construction_errors():
     with pytest.raises(InputError, match="max_fallbacks"):
         SafeSolver("daqp", max_fallbacks=0)
     assert set(STAGES) >= DEGRADED_STAGES
-
-
-def test_deadline_bounds_a_slow_cascade():
-    """ProxQP's cascade needed ~18 s on this badly scaled regression problem (gain 1e9) without
-    limits; with a 50 ms deadline the step ends within one QP of the deadline, flagged: either
-    late but verified (used), or degraded with the solver stages skipped."""
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).parent))
-    from regressions.corpus import HERE, load_problem
-
-    problem, _ = load_problem(HERE / "ee_gain_1e9_no_vehicle_bound.npz")
-    safe = SafeSolver("cascade:proxqp", deadline=0.05)
-    start = time.perf_counter()
-    out = safe.solve(problem)
-    assert time.perf_counter() - start < 3.0
-    assert out.deadline_missed
-    assert out.stage == "primary" or any("deadline passed" in a for a in out.attempts)
-    assert _safe(problem, out.x, 1e-9 * problem.hard_scale).ok

@@ -44,7 +44,7 @@ def capture(ctrl, name: str, note: str) -> None:
     """Save the problem of the controller's last step (first few per run only)."""
     CAPTURE.mkdir(parents=True, exist_ok=True)
     if len(list(CAPTURE.glob("*.npz"))) < 20:
-        save_problem(ctrl._new_problem(), name, note, CAPTURE)
+        save_problem(ctrl.assembler.problem, name, note, CAPTURE)
 
 
 def run_example(solver: str, kind: str, n_joints: int, seed: int, reachable: bool) -> None:

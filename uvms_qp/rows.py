@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validation import FloatArray, as_array, as_matrix, as_vector, check_bounds_order
+from ._validation import FloatArray, as_matrix, as_vector, check_bounds_order
 from .errors import InputError
 
 
@@ -90,19 +90,3 @@ class Rows:
         """Signed-free violation of each row at ``x``: distance of ``A x`` to ``[lower, upper]``."""
         y = self.A @ x
         return np.maximum(self.lower - y, 0.0) + np.maximum(y - self.upper, 0.0)
-
-
-def pair_or_triple_arrays(item: tuple[Any, ...] | list[Any]
-                          ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
-    """Float arrays ``(A, lo, hi)`` of an ``(A, b)`` pair or an ``(A, lo, hi)`` triple.
-
-    For a pair ``lo`` and ``hi`` are the same array ``b``. None when an entry does not convert
-    (the caller's full validation then names it); shapes and values are not checked here.
-    """
-    try:  # real numbers only (strings, booleans and complex numbers are not converted)
-        A = as_array(item[0], "A")
-        lo = as_array(item[1], "lower")
-        hi = lo if len(item) == 2 else as_array(item[2], "upper")
-    except InputError:
-        return None
-    return A, lo, hi

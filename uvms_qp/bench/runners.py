@@ -44,6 +44,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..errors import InputError
+from ..hqp import hard_violation
 from .pink_adapter import PinkController, pink_available, pink_supported, position_gain, rate_box
 from .record import HARD_TOL, Record
 from .sets import BenchProblem
@@ -64,23 +65,24 @@ SATURATED = "saturated into the hard box"
 def constraint_violation(constraints: Any, state: Any, dt: float, zeta: FloatArray) -> float:
     """Largest violation of the hard box and hard rows of ``constraints`` at ``zeta``.
 
-    Recomputed from the constraint objects (independent of the controller's buffers); the box of
-    several constraints is their intersection.
+    Recomputed from the constraint objects (independent of the controller's buffers) with
+    :func:`uvms_qp.hqp.hard_violation`; the box of several constraints is their intersection.
     """
     n = zeta.size
     lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
-    worst = 0.0
+    rows = []
     for c in constraints:
         if getattr(c, "has_box", False):
             lo, hi = c.box(state, dt)
             np.maximum(lower, lo, out=lower)
             np.minimum(upper, hi, out=upper)
         if getattr(c, "rows_dim", 0):
-            rows = c.rows(state, dt)
-            if rows is not None and rows.m:
-                worst = max(worst, float(rows.violation(zeta).max()))
-    box = np.maximum(lower - zeta, 0.0) + np.maximum(zeta - upper, 0.0)
-    return max(worst, float(box.max(initial=0.0)))
+            rows.append(c.rows(state, dt))
+    if not rows:
+        return hard_violation(zeta, lower, upper)
+    return hard_violation(zeta, lower, upper, np.vstack([r.A for r in rows]),
+                          np.concatenate([r.lower for r in rows]),
+                          np.concatenate([r.upper for r in rows]))
 
 
 def level_norms(rows: list[Any], zeta: FloatArray) -> list[float]:
@@ -311,7 +313,7 @@ def _backend_time(result: Any, out: list[float]) -> None:
 def _box_violation(problem: BenchProblem, x: FloatArray) -> float:
     lo = problem.lower if problem.lower is not None else np.full(x.size, -np.inf)
     hi = problem.upper if problem.upper is not None else np.full(x.size, np.inf)
-    return float(max(np.max(lo - x, initial=0.0), np.max(x - hi, initial=0.0)))
+    return hard_violation(x, lo, hi)
 
 
 def _raw_reference_rows(problem: BenchProblem) -> list[Any]:

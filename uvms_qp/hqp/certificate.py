@@ -158,14 +158,9 @@ class Repair:
 
 def problem_arrays(problem: Problem) -> tuple[FloatArray, FloatArray, FloatArray, int, int,
                                              tuple[int, ...], FloatArray]:
-    """The stacked layout ``(A, lo, hi, n, mh, sizes, w)`` of a :class:`Problem`."""
-    n = problem.n
-    st = problem.stacked
-    A = np.vstack((np.eye(n), problem.hard.A, st.A))
-    lo = np.concatenate((problem.lower, problem.hard.lo, st.lo))
-    hi = np.concatenate((problem.upper, problem.hard.hi, st.hi))
-    sizes = tuple(b.m for b in problem.levels)
-    return A, lo, hi, n, problem.hard.m, sizes, np.asarray(st.w, dtype=np.float64)
+    """The stacked layout ``(A, lo, hi, n, mh, sizes, w)`` of a :class:`Problem` (its buffers)."""
+    return (problem.A, problem.lo, problem.hi, problem.n, problem.mh, problem.sizes,
+            problem.w)
 
 
 # ------------------------------------------------------------------------------------ certify

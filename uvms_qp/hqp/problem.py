@@ -1,297 +1,212 @@
-"""Normalisation and validation of a lexicographic problem.
+"""The lexicographic problem in its one stacked layout.
 
-A problem over ``x`` in R^n is a list of levels L_1 > L_2 > ... > L_p, each level a stack of rows
-``lo_k <= A_k x <= hi_k`` with positive per-row weights ``w_k``, hard rows
-``lo_H <= A_H x <= hi_H`` and a hard box ``lower <= x <= upper`` that are never relaxed, and a
-positive diagonal metric ``W`` for the final minimum-norm regularisation ``min x' W x``.
+A problem over ``x`` in R^n has a hard box ``lower <= x <= upper``, ``m_H`` hard rows
+``lo_H <= A_H x <= hi_H`` (never relaxed) and levels ``L_1 > ... > L_p`` of rows
+``lo_k <= A_k x <= hi_k`` with positive row weights ``w_k``, and a positive diagonal metric ``W``
+for the final regularisation ``min x' W x``. Every part of the library holds it the same way:
 
-This module turns the user-facing forms (``Rows`` objects, ``(A, b)`` pairs, ``(A, lo, hi)``
-triples) into one stacked float64 block per level, so that every back-end works on the same
-plain arrays.
+    A  = [ I_n ; A_H ; A_1 ; ... ; A_p ]          (M, n),  M = n + m_H + sum m_k
+    lo = [ lower ; lo_H ; lo_1 ; ... ; lo_p ]      (M,)     -inf allowed
+    hi = [ upper ; hi_H ; hi_1 ; ... ; hi_p ]      (M,)     +inf allowed
+    w  = [ w_1 ; ... ; w_p ]                       (sum m_k,)
+
+so that one product ``A x`` measures every bound, hard row and level row at once
+(:mod:`uvms_qp.hqp.measure`). ``lo`` and ``hi`` are the two rows of one ``(2, M)`` array
+``sides``. The arrays are buffers: a controller writes each tick's rows straight into them,
+:func:`uvms_qp.hqp.validate.normalize_problem` fills them from user input, and back-ends read them
+in place (DAQP is handed pointers into ``A``).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from functools import cached_property
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray, as_vector, check_bounds_order
-from ..errors import InputError, ShapeError
-from ..rows import Rows, pair_or_triple_arrays
+from .._validation import FloatArray, as_vector
+from ..errors import InputError
+from ..rows import Rows
 
 
-@dataclass(frozen=True, eq=False)
-class Block:
-    """Stacked rows of one level (or of the hard rows): ``lo <= A x <= hi``.
-
-    Attributes:
-        A: Row matrix, shape (m, n).
-        lo: Lower sides, shape (m,), ``-inf`` allowed.
-        hi: Upper sides, shape (m,), ``+inf`` allowed.
-        w: Positive row weights, shape (m,).
-        eq: Boolean mask of equality rows (``lo == hi``), shape (m,).
-        names: Names of the ``Rows`` the block was stacked from.
-    """
-
-    A: FloatArray
-    lo: FloatArray
-    hi: FloatArray
-    w: FloatArray
-    eq: np.ndarray
-    names: tuple[str, ...] = ()
-
-    @property
-    def m(self) -> int:
-        """Number of rows."""
-        return int(self.A.shape[0])
-
-    @property
-    def all_equality(self) -> bool:
-        """True when every row is an equality."""
-        return bool(self.eq.all())
-
-    def violation(self, x: FloatArray) -> FloatArray:
-        """Signed slack ``s = A x - clip(A x, lo, hi)`` (> 0 above ``hi``, < 0 below ``lo``)."""
-        y = self.A @ x
-        return y - np.minimum(np.maximum(y, self.lo), self.hi)
-
-    def residual(self, x: FloatArray) -> float:
-        """Weighted violation norm ``sqrt(sum_i w_i s_i^2)``."""
-        s = self.violation(x)
-        return float(np.sqrt(self.w @ (s * s)))
-
-    def scale(self) -> float:
-        """Magnitude of the finite sides for relative tolerances: ``max(1, max |side|)``."""
-        sides = np.concatenate((self.lo, self.hi))
-        finite = sides[np.isfinite(sides)]
-        return float(max(1.0, np.abs(finite).max())) if finite.size else 1.0
+def _count(value: Any, name: str, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least:
+        raise InputError(f"{name}: expected an integer >= {least}, got {value!r}")
+    return int(value)
 
 
-@dataclass(frozen=True, eq=False)
 class Problem:
-    """A normalised lexicographic problem (see the module docstring for the maths).
+    """Buffers of one problem structure ``(n, m_H, (m_1, ..., m_p))`` (see the module docstring).
+
+    Args:
+        n: Number of variables.
+        hard_rows: Number of hard general rows ``m_H``.
+        sizes: Rows per level, highest priority first (0 allowed: an empty level).
+        W: Diagonal metric (n,), positive; None for the identity.
+        A: Use this (M, n) array as ``A`` instead of a new one (its first n rows must be the
+            identity); for problems that share rows with another (e.g. fewer levels).
+        sides: Use this (2, M) array as ``sides``.
+        w: Use this array as the level row weights.
 
     Attributes:
         n: Number of variables.
-        levels: One stacked block per level, highest priority first.
-        hard: Stacked hard general rows (possibly with zero rows).
-        lower: Hard lower bounds on x, shape (n,), ``-inf`` allowed.
-        upper: Hard upper bounds on x, shape (n,), ``+inf`` allowed.
-        W: Diagonal of the regularisation metric, shape (n,), positive.
-    """
-
-    n: int
-    levels: tuple[Block, ...]
-    hard: Block
-    lower: FloatArray
-    upper: FloatArray
-    W: FloatArray
-
-    @property
-    def has_box(self) -> bool:
-        """True when at least one bound is finite."""
-        return bool(np.isfinite(self.lower).any() or np.isfinite(self.upper).any())
-
-    @property
-    def all_equality(self) -> bool:
-        """True when every level holds only equality rows."""
-        return all(level.all_equality for level in self.levels)
-
-    @cached_property
-    def stacked(self) -> Block:
-        """All level rows stacked in priority order (computed once per problem)."""
-        if len(self.levels) == 1:
-            return self.levels[0]
-        if not self.levels:
-            return Block(np.zeros((0, self.n)), np.zeros(0), np.zeros(0), np.zeros(0),
-                         np.zeros(0, dtype=bool))
-        return Block(np.vstack([b.A for b in self.levels]),
-                     np.concatenate([b.lo for b in self.levels]),
-                     np.concatenate([b.hi for b in self.levels]),
-                     np.concatenate([b.w for b in self.levels]),
-                     np.concatenate([b.eq for b in self.levels]))
-
-    @cached_property
-    def offsets(self) -> np.ndarray:
-        """Index of the first stacked row of each level."""
-        return np.cumsum([0] + [b.m for b in self.levels[:-1]]).astype(np.intp)
-
-    @cached_property
-    def level_scales(self) -> np.ndarray:
-        """``max(1, max |finite side|)`` of each level (for relative tolerances)."""
-        st = self.stacked
-        if not st.m or not all(b.m for b in self.levels):
-            return np.array([b.scale() for b in self.levels])
-        lo = np.where(np.isfinite(st.lo), np.abs(st.lo), 0.0)
-        hi = np.where(np.isfinite(st.hi), np.abs(st.hi), 0.0)
-        return np.maximum(np.maximum.reduceat(np.maximum(lo, hi), self.offsets), 1.0)
-
-    @cached_property
-    def hard_scale(self) -> float:
-        """``max(1, max |finite bound or hard side|)``."""
-        v = 1.0
-        for side in (self.lower, self.upper, self.hard.lo, self.hard.hi):
-            if side.size:
-                v = max(v, float(np.where(np.isfinite(side), np.abs(side), 0.0).max()))
-        return v
-
-    @cached_property
-    def active_tol(self) -> tuple[np.ndarray, np.ndarray]:
-        """Tolerances deciding that a bound is active: ``1e-9 (1 + |bound|)``."""
-        return (1e-9 * (1.0 + np.abs(np.where(np.isfinite(self.lower), self.lower, 0.0))),
-                1e-9 * (1.0 + np.abs(np.where(np.isfinite(self.upper), self.upper, 0.0))))
-
-
-def _fast_rows(item: tuple[Any, ...] | list[Any]) -> Rows | None:
-    """Cheap acceptance test for a well-formed tuple; None sends it to the full validation.
-
-    Only checks that pass for valid input run here (dtype, shapes, finiteness, ordering); any
-    doubt falls back to :meth:`Rows.validated`, which produces the detailed error message.
-    """
-    arrays = pair_or_triple_arrays(item)
-    if arrays is None:
-        return None
-    A, lo, hi = arrays
-    if A.ndim != 2 or lo.ndim != 1 or hi.ndim != 1:
-        return None
-    m = A.shape[0]
-    if lo.shape[0] != m or hi.shape[0] != m or not np.isfinite(A).all():
-        return None
-    if len(item) == 2:
-        if not np.isfinite(lo).all():
-            return None
-    elif np.isnan(lo).any() or np.isnan(hi).any() or (lo > hi).any() or (lo == np.inf).any() or (
-            hi == -np.inf).any():
-        return None
-    return Rows(A, lo, hi)
-
-
-def _checked_rows(rows: Rows, label: str) -> Rows:
-    """Check a caller's ``Rows`` (built directly, so never validated) like a tuple.
-
-    Well-formed float rows pass with a few reductions; anything else is rebuilt through
-    :meth:`Rows.validated`, which raises the error naming ``label`` (and the rows' name).
-    """
-    fast = _fast_rows((rows.A, rows.lower, rows.upper))
-    w = rows.weights
-    if fast is not None and (w is None or (
-            type(w) is np.ndarray and w.dtype.kind == "f" and w.shape == fast.lower.shape
-            and np.isfinite(w).all() and (w > 0.0).all())):
-        if fast.A is rows.A and fast.lower is rows.lower and fast.upper is rows.upper:
-            return rows
-        return Rows(fast.A, fast.lower, fast.upper, w, rows.name)
-    name = f"{label} ({rows.name})" if rows.name else label
-    checked = Rows.validated(rows.A, rows.lower, rows.upper, rows.weights, name)
-    return Rows(checked.A, checked.lower, checked.upper, checked.weights, rows.name)
-
-
-def _as_rows(item: Any, label: str) -> Rows:
-    """Turn one level item (Rows, (A, b) or (A, lo, hi)) into validated ``Rows``."""
-    if isinstance(item, Rows):
-        return _checked_rows(item, label)
-    if isinstance(item, tuple | list) and len(item) in (2, 3):
-        fast = _fast_rows(item)
-        if fast is not None:
-            return fast
-    if isinstance(item, tuple | list) and len(item) == 2:
-        return Rows.equality(item[0], item[1], name=label)
-    if isinstance(item, tuple | list) and len(item) == 3:
-        return Rows.inequality(item[0], item[1], item[2], name=label)
-    raise InputError(
-        f"{label}: expected Rows, an (A, b) pair or an (A, lo, hi) triple, "
-        f"got {type(item).__name__}"
-    )
-
-
-def _stack(items: Sequence[Any], n: int | None, label: str) -> tuple[Block, int | None]:
-    """Stack the rows of one level into a :class:`Block`; returns the block and the column count."""
-    if isinstance(items, Rows) or (isinstance(items, tuple) and items and not isinstance(
-        items[0], Rows | tuple | list)):
-        items = [items]  # a single Rows or a bare (A, b) tuple given as a level
-    if not isinstance(items, Sequence) or isinstance(items, str | bytes):
-        raise InputError(f"{label}: expected a list of rows, got {type(items).__name__}")
-    rows = [_as_rows(item, f"{label}[{i}]") for i, item in enumerate(items)]
-    for i, r in enumerate(rows):
-        if n is None:
-            n = r.n
-        elif r.n != n:
-            raise ShapeError(f"{label}[{i}].A: expected {n} columns, got {r.n}")
-    width = 0 if n is None else n
-    if len(rows) == 1:
-        r = rows[0]
-        A, lo, hi = r.A, r.lower, r.upper
-        w = r.weights if r.weights is not None else np.ones(r.m)
-    elif rows:
-        A = np.vstack([r.A for r in rows])
-        lo = np.concatenate([r.lower for r in rows])
-        hi = np.concatenate([r.upper for r in rows])
-        w = np.concatenate([r.weights if r.weights is not None else np.ones(r.m) for r in rows])
-    else:
-        A, lo, hi, w = np.zeros((0, width)), np.zeros(0), np.zeros(0), np.zeros(0)
-    return Block(A, lo, hi, w, lo == hi, tuple(r.name for r in rows)), n
-
-
-def normalize_problem(
-    levels: Sequence[Any],
-    lower: Any = None,
-    upper: Any = None,
-    weights: Any = None,
-    hard: Sequence[Any] | None = None,
-    n: int | None = None,
-) -> Problem:
-    """Validate the user's problem and stack it into a :class:`Problem`.
-
-    Args:
-        levels: Levels, highest priority first; a level is a list of ``Rows``, ``(A, b)`` pairs
-            or ``(A, lo, hi)`` triples.
-        lower: Hard lower bounds on x (length n, ``-inf`` allowed) or None.
-        upper: Hard upper bounds on x (length n, ``+inf`` allowed) or None.
-        weights: Diagonal of the metric W (length n, positive) or None for the identity.
-        hard: Hard general rows (same forms as a level) or None.
-        n: Number of variables when it cannot be read from the rows (e.g. no levels).
-
-    Returns:
-        The stacked problem.
+        mh: Number of hard rows.
+        sizes: Rows per level.
+        head: ``n + mh``: the rows of the box and the hard rows, before the level rows.
+        M: Number of stacked rows.
+        A: Stacked rows (M, n); write rows ``A[n:]`` only.
+        sides: ``(2, M)``: lower sides, then upper sides.
+        lo: ``sides[0]``.
+        hi: ``sides[1]``.
+        W: Diagonal metric (n,).
+        w: Level row weights (sum m_k,); change them with :meth:`set_weights` only (other
+            parts derive data from them, refreshed on :attr:`weights_version`).
+        weights_version: Incremented by every :meth:`set_weights`.
+        spans: ``(start, end)`` of each level in the stacked rows.
+        G: ``(1 + p, M)``: row 0 sums the box and hard rows, row ``k + 1`` the weighted rows of
+            level ``k`` (``G @ (s * s)`` gives every squared residual in one product).
+        unit_weights: Every level row weight is 1.
+        signs: ``(2, M)`` rows of +1 and -1 (``vdot(sides, signs) = sum(lo) - sum(hi)``).
+        flags: Scratch booleans (M,) for checks.
 
     Raises:
-        InputError: malformed levels or non-positive weights.
-        ShapeError: inconsistent column counts or vector lengths.
-        NonFiniteError: NaN anywhere, or inf in a matrix / equality target.
-        BoundsError: a lower side above its upper side.
+        InputError: a size that is not a non-negative integer, or a bad metric.
     """
-    if isinstance(levels, Rows) or not isinstance(levels, Sequence) or isinstance(
-        levels, str | bytes
-    ):
-        raise InputError(f"levels: expected a list of levels, got {type(levels).__name__}")
-    blocks = []
-    for k, level in enumerate(levels):
-        block, n = _stack(level, n, f"levels[{k}]")
-        blocks.append(block)
-    hard_block, n = _stack(list(hard) if hard is not None else [], n, "hard")
-    if n == 0:
-        raise ShapeError("levels: the rows have 0 columns (at least one variable is needed)")
-    if n is None:
-        for vec in (lower, upper, weights):
-            if vec is not None:
-                n = int(np.size(vec))
-                break
-    if n is None or n < 1:
-        raise InputError("levels: cannot infer the number of variables (no rows and no bounds)")
-    lo = np.full(n, -np.inf) if lower is None else as_vector(lower, "lower", n, allow_inf=True)
-    hi = np.full(n, np.inf) if upper is None else as_vector(upper, "upper", n, allow_inf=True)
-    check_bounds_order(lo, hi, "bounds")
-    if np.any(lo == np.inf) or np.any(hi == -np.inf):
-        raise InputError("bounds: a lower bound is +inf or an upper bound is -inf")
-    W = np.ones(n) if weights is None else as_vector(weights, "weights", n, positive=True)
-    if hard_block.m == 0 and hard_block.A.shape[1] != n:
-        hard_block = Block(np.zeros((0, n)), np.zeros(0), np.zeros(0), np.zeros(0),
-                           np.zeros(0, dtype=bool))
-    for k, block in enumerate(blocks):
-        if block.m == 0 and block.A.shape[1] != n:
-            blocks[k] = Block(np.zeros((0, n)), np.zeros(0), np.zeros(0), np.zeros(0),
-                              np.zeros(0, dtype=bool))
-    return Problem(n, tuple(blocks), hard_block, lo, hi, W)
+
+    __slots__ = (
+        "A",
+        "G",
+        "M",
+        "W",
+        "__weakref__",
+        "flags",
+        "head",
+        "hi",
+        "lo",
+        "mh",
+        "n",
+        "sides",
+        "signs",
+        "sizes",
+        "spans",
+        "unit_weights",
+        "w",
+        "weights_version",
+    )
+
+    def __init__(self, n: int, hard_rows: int = 0, sizes: Sequence[int] = (), W: Any = None, *,
+                 A: FloatArray | None = None, sides: FloatArray | None = None,
+                 w: FloatArray | None = None) -> None:
+        n = _count(n, "n", 1)
+        mh = _count(hard_rows, "hard_rows", 0)
+        if isinstance(sizes, str | bytes) or not isinstance(sizes, Sequence):
+            raise InputError(f"sizes: expected a list of row counts, got {sizes!r}")
+        self.sizes = tuple(_count(m, f"sizes[{k}]", 0) for k, m in enumerate(sizes))
+        self.n, self.mh, self.head = n, mh, n + mh
+        ml = sum(self.sizes)
+        self.M = M = self.head + ml
+        if A is None:
+            A = np.zeros((M, n))
+            A[:n] = np.eye(n)
+        if sides is None:
+            sides = np.empty((2, M))
+            sides[0], sides[1] = -np.inf, np.inf
+        self.A, self.sides = A, sides
+        self.lo, self.hi = sides[0], sides[1]
+        self.signs = np.ones((2, M))  # [+1; -1]: vdot(sides, signs) = sum(lo) - sum(hi)
+        self.signs[1] = -1.0
+        self.flags = np.zeros(M, dtype=bool)  # scratch of the checks
+        self.W = np.ones(n) if W is None else as_vector(W, "W", n, positive=True)
+        ends = np.cumsum((self.head, *self.sizes)).tolist()
+        self.spans = tuple(pairwise(ends))
+        self.w = np.ones(ml) if w is None else w
+        self.weights_version = 0
+        self.G = np.zeros((1 + len(self.sizes), M))
+        self.G[0, :self.head] = 1.0
+        self.set_weights(self.w)
+
+    # ------------------------------------------------------------------------------- views
+    @property
+    def lower(self) -> FloatArray:
+        """Hard lower bounds on x (n,), a view of ``lo``."""
+        return self.lo[:self.n]
+
+    @property
+    def upper(self) -> FloatArray:
+        """Hard upper bounds on x (n,), a view of ``hi``."""
+        return self.hi[:self.n]
+
+    @property
+    def hard(self) -> Rows:
+        """The hard rows as :class:`~uvms_qp.rows.Rows` (views)."""
+        n, h = self.n, self.head
+        return Rows(self.A[n:h], self.lo[n:h], self.hi[n:h])
+
+    def level(self, k: int) -> Rows:
+        """The rows of level ``k`` as :class:`~uvms_qp.rows.Rows` (views, weights always set)."""
+        a, b = self.spans[k]
+        h = self.head
+        return Rows(self.A[a:b], self.lo[a:b], self.hi[a:b], self.w[a - h:b - h])
+
+    @property
+    def levels(self) -> tuple[Rows, ...]:
+        """Every level's rows, highest priority first (views)."""
+        return tuple(self.level(k) for k in range(len(self.sizes)))
+
+    def scale(self, start: int, end: int) -> float:
+        """``max(1, max |finite side|)`` over stacked rows ``start:end`` (relative tolerances)."""
+        lo, hi = self.sides[:, start:end].tolist()
+        values = lo + hi
+        if not values:
+            return 1.0
+        big = max(max(values), -min(values))
+        if big == math.inf:
+            big = max(map(abs, filter(math.isfinite, values)), default=0.0)
+        return big if big > 1.0 else 1.0
+
+    @property
+    def hard_scale(self) -> float:
+        """``max(1, max |finite bound or hard side|)``."""
+        return self.scale(0, self.head)
+
+    # ----------------------------------------------------------------------------- changes
+    def set_weights(self, w: Any = None, rows: slice | None = None) -> None:
+        """Write level row weights (all of them, or ``rows`` of the level part); None for ones.
+
+        The weights must be positive and finite (checked by the writers: the validator, the
+        controller's tasks).
+        """
+        target = self.w if rows is None else self.w[rows]
+        if w is None:
+            target.fill(1.0)
+        elif w is not target:
+            target[...] = w
+        G, h = self.G, self.head
+        for k, (a, b) in enumerate(self.spans):
+            G[k + 1, a:b] = self.w[a - h:b - h]
+        self.unit_weights = bool((self.w == 1.0).all())
+        self.weights_version += 1
+
+    def relaxed(self, keep: int) -> Problem:
+        """The problem with only the ``keep`` highest levels, on the same buffers."""
+        end = self.spans[keep - 1][1] if keep else self.head
+        ml = end - self.head
+        return Problem(self.n, self.mh, self.sizes[:keep], self.W, A=self.A[:end],
+                       sides=self.sides[:, :end], w=self.w[:ml])
+
+    def regrouped(self, sizes: Sequence[int], w: FloatArray | None = None) -> Problem:
+        """The same rows split into other levels (same total), with their own weights."""
+        if sum(sizes) != self.M - self.head:
+            raise InputError(f"sizes: expected {self.M - self.head} rows in all, got {sum(sizes)}")
+        return Problem(self.n, self.mh, sizes, self.W, A=self.A, sides=self.sides,
+                       w=np.ones(self.M - self.head) if w is None else w)
+
+    def copy(self) -> Problem:
+        """A problem with copies of every buffer (a snapshot of this tick's values)."""
+        return Problem(self.n, self.mh, self.sizes, self.W.copy(), A=self.A.copy(),
+                       sides=self.sides.copy(), w=self.w.copy())
+
+    def __repr__(self) -> str:
+        return f"Problem(n={self.n}, hard_rows={self.mh}, sizes={list(self.sizes)})"

@@ -39,7 +39,7 @@ class SolverSpec:
         retries: Alternative back-end settings tried, in order, when a QP fails (e.g. looser
             tolerances for an interior-point method that calls a thin feasible set infeasible).
         certify: Every QP answer is sharpened on its active set and accepted only with a KKT
-            certificate (:mod:`uvms_qp.hqp.backends.certify`); an answer that cannot be
+            certificate (:mod:`uvms_qp.hqp.kkt`); an answer that cannot be
             certified fails the QP (retries, then a truthful non-ok status). For back-ends whose
             own "solved" is not accurate enough to trust.
         prox_steps: Proximal refinements ``min f + rho/2 |y - y_j|^2`` after the first QP of a

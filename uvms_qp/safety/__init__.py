@@ -1,18 +1,18 @@
-"""Reliability layer: validate before solving, verify after, fall back safely.
+"""Reliability layer: every control step ends with a finite command inside the hard box.
 
-* :mod:`~uvms_qp.safety.verify`: is a back-end's answer finite, inside the hard set, truthful?
 * :mod:`~uvms_qp.safety.fallback`: the ladder (cold retry, alternate back-end, relaxed levels,
-  decayed previous command, zero, hold zero) in :class:`SafeSolver`;
-* :mod:`~uvms_qp.safety.saturation`: the final clip to the hard box, with the amount reported;
-* :mod:`~uvms_qp.safety.deadline`: the per-step wall-clock budget and back-end limits;
+  decayed previous command, zero, hold zero) in :class:`SafeSolver`, which runs every solve of
+  every scheme; an answer is verified by its measurement (:mod:`uvms_qp.hqp.measure`);
+* :mod:`~uvms_qp.safety.deadline`: the back-ends' own limits derived from the step's budget.
 
 See ``docs/reliability.md`` for the contract of a control step.
 """
 
 from __future__ import annotations
 
-from .deadline import Deadline, backend_limits
+from .deadline import backend_limits
 from .fallback import (
+    CLIP_FLAG_TOL,
     DEGRADED_STAGES,
     SOLVED_STAGES,
     STAGES,
@@ -20,26 +20,16 @@ from .fallback import (
     SafeSolver,
     default_alternate,
     fallback_summary,
-    reset_warm_start,
 )
-from .saturation import Saturation, saturate
-from .verify import Verdict, hard_violation_of, verify_point, verify_solution
 
 __all__ = [
+    "CLIP_FLAG_TOL",
     "DEGRADED_STAGES",
     "SOLVED_STAGES",
     "STAGES",
-    "Deadline",
     "SafeSolve",
     "SafeSolver",
-    "Saturation",
-    "Verdict",
     "backend_limits",
     "default_alternate",
     "fallback_summary",
-    "hard_violation_of",
-    "reset_warm_start",
-    "saturate",
-    "verify_point",
-    "verify_solution",
 ]

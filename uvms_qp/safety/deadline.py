@@ -2,8 +2,8 @@
 
 Behaviour (also in ``docs/reliability.md``):
 
-1. The step's wall clock starts when the safe solver is called; :class:`Deadline` measures the
-   time left with :func:`time.perf_counter`.
+1. The step's clock starts when the step begins (the controller's ``step``; the safe solver's
+   ``solve`` when called alone) and reads :func:`time.perf_counter` (or a clock given for tests).
 2. Each back-end receives a time or iteration limit derived from the budget
    (:func:`backend_limits`): DAQP ``time_limit`` [s] (hierarchical mode and cascade), HiGHS,
    OSQP and Clarabel ``time_limit`` [s], ProxQP and PIQP an iteration cap; quadprog has none.
@@ -22,42 +22,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
-
-from .._validation import as_scalar
-
-
-class Deadline:
-    """Wall-clock budget of one control step.
-
-    Args:
-        budget: Time allowed for the solver stages [s]; ``inf`` (or None) for no deadline.
-        start: ``time.perf_counter()`` value the budget counts from (default: now).
-
-    Raises:
-        InputError: a non-positive or NaN budget.
-    """
-
-    __slots__ = ("budget", "end", "start")
-
-    def __init__(self, budget: float | None, start: float | None = None) -> None:
-        self.budget = math.inf if budget is None else as_scalar(
-            budget, "deadline", positive=True, allow_inf=True)
-        self.start = time.perf_counter() if start is None else float(start)
-        self.end = self.start + self.budget
-
-    def remaining(self) -> float:
-        """Time left before the deadline [s] (negative once passed)."""
-        return self.end - time.perf_counter()
-
-    def expired(self) -> bool:
-        """True once the deadline has passed."""
-        return time.perf_counter() > self.end
-
-    def elapsed(self) -> float:
-        """Time since the start [s]."""
-        return time.perf_counter() - self.start
-
 
 #: Solver name -> options that cap its run time, as a function of the budget [s].
 _TIME_LIMITS: dict[str, str] = {
@@ -83,8 +49,9 @@ class CascadeGuard:
     :class:`TimeoutError` (which the cascade treats as a failed QP); None disables the guard.
     """
 
-    def __init__(self, module: Any) -> None:
+    def __init__(self, module: Any, clock: Callable[[], float] = time.perf_counter) -> None:
         self._module = module
+        self.clock = clock
         self.end: float | None = None
 
     def __getattr__(self, name: str) -> Any:
@@ -92,19 +59,21 @@ class CascadeGuard:
 
     def solve_problem(self, *args: Any, **kwargs: Any) -> Any:
         """``qpsolvers.solve_problem``, unless the deadline has passed."""
-        if self.end is not None and time.perf_counter() > self.end:
+        if self.end is not None and self.clock() > self.end:
             raise TimeoutError("step deadline passed: QP not started")
         return self._module.solve_problem(*args, **kwargs)
 
 
-def guard_cascade(backend: Any) -> CascadeGuard | None:
+def guard_cascade(backend: Any, clock: Callable[[], float] = time.perf_counter
+                  ) -> CascadeGuard | None:
     """Install a :class:`CascadeGuard` in a cascade back-end; None for other back-ends."""
     module = getattr(backend, "_qpsolvers", None)
     if module is None:
         return None
     if isinstance(module, CascadeGuard):
+        module.clock = clock
         return module
-    guard = CascadeGuard(module)
+    guard = CascadeGuard(module, clock)
     backend._qpsolvers = guard
     return guard
 

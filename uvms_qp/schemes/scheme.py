@@ -26,6 +26,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError, NonFiniteError
+from ..hqp import Status
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..controller import StepResult
@@ -143,14 +144,15 @@ def _make_result(
 ) -> StepResult:
     """Pack a closed-form step into the controller's result type.
 
-    Uses the public :meth:`~uvms_qp.controller.StepResult.from_command`: no hierarchy solve, status
-    ``optimal``, the step time as solve time, an unbounded box (a closed-form scheme knows no hard
-    bounds); ``task_residuals`` and ``task_errors`` report the scheme's own task error norms with
-    their units, all in one level.
+    No hierarchy solve (``hierarchy`` is None), status ``optimal``, an unbounded box (a
+    closed-form scheme knows no hard bounds); ``task_residuals`` and ``task_errors`` report the
+    scheme's own task error norms with their units, all in one level.
     """
     from ..controller import StepResult
 
-    return StepResult.from_command(
-        zeta, t=t, step_time=step_time, scheme=name, solver="closed-form", residuals=residuals,
-        message=f"closed-form scheme {name}",
-    )
+    z = np.asarray(zeta, dtype=np.float64)
+    n = z.shape[0]
+    return StepResult(
+        z, Status.OPTIMAL, None, t, step_time, name, "closed-form", np.full(n, -np.inf),
+        np.full(n, np.inf), level_names=(tuple(residuals),) if residuals else (),
+        task_residuals=dict(residuals), task_errors=dict(residuals))

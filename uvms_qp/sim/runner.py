@@ -26,6 +26,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..constraints import CommandRateBounds, intersect_boxes
+from ..hqp import hard_violation
 from ..safety import STAGES
 from ..stack import Stack
 from .probes import Probes
@@ -194,17 +195,16 @@ def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: F
                           lower: FloatArray, upper: FloatArray) -> float:
     """Largest violation by ``zeta`` of the box ``lower``/``upper`` and the constraints' hard rows.
 
-    The box is the one :func:`~uvms_qp.constraints.intersect_boxes` gave before the step.
+    The box is the one :func:`~uvms_qp.constraints.intersect_boxes` gave before the step; the
+    violation is :func:`uvms_qp.hqp.hard_violation` of that box and of the hard rows rebuilt
+    from the constraint objects.
     """
-    worst = 0.0
-    for constraint in constraints:
-        rows = constraint.rows(state, dt)
-        if rows is not None and rows.m:
-            worst = max(worst, float(rows.violation(zeta).max()))
-    box_violation = np.maximum(lower - zeta, 0.0) + np.maximum(zeta - upper, 0.0)
-    if box_violation.size:
-        worst = max(worst, float(box_violation.max()))
-    return worst
+    rows = [constraint.rows(state, dt) for constraint in constraints if constraint.rows_dim]
+    if not rows:
+        return hard_violation(zeta, lower, upper)
+    return hard_violation(zeta, lower, upper, np.vstack([r.A for r in rows]),
+                          np.concatenate([r.lower for r in rows]),
+                          np.concatenate([r.upper for r in rows]))
 
 
 class _Progress:

@@ -11,7 +11,7 @@ Every ``retarget`` steps the tool target is re-drawn (uniform in a 2 m box aroun
 so part of the targets are beyond reach) and the payload force re-drawn; every ``restart`` steps
 the state is reset to the scenario's initial configuration and the target sequence restarts from
 the same seed, so every cycle repeats the same motion. Faults are injected into the primary
-back-end at random (:class:`~uvms_qp.testing.faults.RandomFaults`, their own random stream, so
+back-end at random (:class:`~uvms_qp.testing.faults.RandomInjector`, their own random stream, so
 they differ from cycle to cycle). Memory is traced with :mod:`tracemalloc` after a warm-up;
 latency drift compares the median step time of the first cycle after the warm-up with that of
 the last cycle (same motion, fault-free steps only).
@@ -125,11 +125,8 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
     stack = scenario.build_stack()
     ctrl = Controller(model, stack, solver=solver, dt=dt, metric=scenario.metric,
                       deadline=deadline)
-    assert ctrl.safe is not None
-    # a wrapped primary back-end is always called through the controller's general path (the
-    # in-place DAQP solve is the unwrapped back-end's own); with no faults to inject, nothing is
-    # wrapped and the soak runs the controller's real path
-    faults = (inject_random(ctrl.safe.primary, fault_rate, fault_rng, sleep=sleep)
+    # the controller has one path: a wrapped back-end is called exactly where the real one is
+    faults = (inject_random(ctrl, fault_rate, fault_rng, sleep=sleep)
               if fault_rate > 0 else None)
     tool = cast(EndEffectorTask, stack.task("tool"))
     payload = stack.task("payload")

@@ -1,31 +1,59 @@
-"""Back-ends of the lexicographic solver; each exposes ``solve(problem) -> BackendOutput``."""
+"""Back-ends of the lexicographic solver: one file per family, one protocol.
+
+A back-end turns a :class:`~uvms_qp.hqp.problem.Problem` into an :class:`Answer` (the raw ``x``
+and what the back-end says about it); everything after it is shared: the measurement and status
+of :mod:`uvms_qp.hqp.measure`, the fallback ladder of :mod:`uvms_qp.safety`.
+
+=================  ==========================================================================
+family             module
+=================  ==========================================================================
+``daqp``           :mod:`.daqp`: DAQP's hierarchical mode, all levels in one call (C binding in
+                   :mod:`.daqp_binding`)
+``cascade``        :mod:`.cascade`: one QP per level through qpsolvers
+``nullspace``      :mod:`.nullspace`: the closed-form recursive null-space solution
+=================  ==========================================================================
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Protocol
 
 from ..._validation import FloatArray
+from ..measure import Measured
+from ..problem import Problem
+from ..registry import SolverSpec
 from ..result import Status
 
 
-@dataclass
-class BackendOutput:
-    """What a back-end hands to :func:`uvms_qp.hqp.evaluate.evaluate`.
+@dataclass(slots=True)
+class Answer:
+    """What a back-end hands on to :func:`uvms_qp.hqp.measure.evaluate`.
 
     Attributes:
-        x: Solution or None on failure.
-        status: The back-end's verdict (OPTIMAL means "claims success"; the evaluation decides
-            between optimal and level_infeasible).
+        x: Solution, or None on failure (never trusted: measured afterwards).
+        status: The back-end's verdict (``optimal`` means "claims success": the measurement
+            decides between optimal and level_infeasible).
         message: Detail for the user.
         info: Back-end extras (exit flags, DAQP's own timing...).
-        measured: Set by back-ends with a stacked workspace when ``x`` was already measured:
-            ``(workspace, slacks, lo, hi, w, box/hard violation)`` for
-            :func:`uvms_qp.hqp.evaluate.evaluate_stacked`; None otherwise.
+        measured: :func:`~uvms_qp.hqp.measure.measure` of ``x``, when the back-end measured it
+            already (its own acceptance test), so that it is not measured twice.
     """
 
     x: FloatArray | None
     status: Status = Status.OPTIMAL
     message: str = ""
     info: dict[str, object] = field(default_factory=dict)
-    measured: tuple[Any, ...] | None = None
+    measured: Measured | None = None
+
+
+class Backend(Protocol):
+    """A back-end of the lexicographic problem."""
+
+    spec: SolverSpec
+
+    def solve(self, problem: Problem) -> Answer:
+        """Solve ``problem`` (trusted: validated upstream)."""
+
+    def reset(self) -> None:
+        """Forget any warm start: the next solve starts cold."""

@@ -15,7 +15,8 @@ the registry). The equality rows of level k are then frozen at the values ``a_i 
 ``Z <- Z null(A_k Z)`` and ``x_p <- x`` (so ``y = 0`` stays feasible for every later QP). A last QP
 minimises ``x' W x`` over what is left. Only inequality rows are given to qpsolvers, which sidesteps
 wrappers that mishandle equality rows. ``rho`` (relative 1e-10) keeps small dense solvers strictly
-convex; results are measured, never trusted, in :mod:`uvms_qp.hqp.evaluate`.
+convex; inexact back-ends' answers are sharpened and certified per QP (:mod:`uvms_qp.hqp.kkt`),
+and results are measured, never trusted, in :mod:`uvms_qp.hqp.measure`.
 """
 
 from __future__ import annotations
@@ -30,12 +31,13 @@ from typing import Any
 import numpy as np
 
 from ..._validation import FloatArray
-from ..evaluate import hard_feasible, hard_point, hard_scale, hard_violation, polish_hard
+from ..hard_set import hard_feasible, hard_point, polish_hard
+from ..kkt import active_set_from, certified_point
+from ..measure import hard_violation
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
-from . import BackendOutput
-from .certify import active_set_from, certified_point
+from . import Answer
 
 
 @cache
@@ -197,12 +199,6 @@ class CascadeBackend:
             if cert is None:
                 return None, none
             z, lam, lam_b, mult_tol = cert.z, cert.lam, cert.lam_box, self.mult_tol
-        elif not self.spec.exact:
-            for act_tol in (1e-7, 1e-6, 1e-5):
-                zp = _polish_active_set(P, q, G, h, lb, ub, z, act_tol)
-                if zp is not z:
-                    z = zp
-                    break
         return z, self._strong(rows, G, h, lb, ub, z, lam, lam_b, mult_tol)
 
     @staticmethod
@@ -256,13 +252,13 @@ class CascadeBackend:
         p = Z.shape[1]
         rows = _Rows(width, problem.n)
         lb = ub = None
-        margin = self.spec.freeze_margin * hard_scale(problem) if frozen or p < problem.n else 0.0
+        margin = self.spec.freeze_margin * problem.hard_scale if frozen or p < problem.n else 0.0
 
         def over_y(C: FloatArray) -> FloatArray:
             CZ = C @ Z
             return np.hstack((CZ, np.zeros((CZ.shape[0], width - p)))) if width > p else CZ
 
-        if problem.has_box:
+        if np.isfinite(problem.lower).any() or np.isfinite(problem.upper).any():
             if Z.shape[1] == problem.n and not xp.any() and np.array_equal(Z, np.eye(problem.n)):
                 lb = np.concatenate((problem.lower, np.full(width - p, -np.inf)))
                 ub = np.concatenate((problem.upper, np.full(width - p, np.inf)))
@@ -270,18 +266,21 @@ class CascadeBackend:
                 eye = np.eye(problem.n)
                 rows.add(over_y(eye), problem.lower - xp, problem.upper - xp, margin, eye)
         hard = problem.hard
-        ineq = ~hard.eq
+        ineq = hard.lower != hard.upper
         if ineq.any():
             base = hard.A[ineq] @ xp
-            rows.add(over_y(hard.A[ineq]), hard.lo[ineq] - base, hard.hi[ineq] - base, margin,
-                     hard.A[ineq])
+            rows.add(over_y(hard.A[ineq]), hard.lower[ineq] - base, hard.upper[ineq] - base,
+                     margin, hard.A[ineq])
         for A, lo, hi in frozen:
             base = A @ xp
             rows.add(over_y(A), lo - base, hi - base, 0.0, A)
         return rows, lb, ub
 
     # -- the cascade --------------------------------------------------------------------------
-    def solve(self, problem: Problem) -> BackendOutput:
+    def reset(self) -> None:
+        """Nothing to forget (every solve starts from scratch)."""
+
+    def solve(self, problem: Problem) -> Answer:
         """Solve level by level; on a failed QP return the last verified point and say so.
 
         ``info["rescued_qps"]`` counts the QPs of this solve that the back-end failed and the
@@ -293,13 +292,14 @@ class CascadeBackend:
         xp = np.zeros(n)
         Z = np.eye(n)
         hard = problem.hard
-        if hard.eq.any():
-            E, e = hard.A[hard.eq], hard.lo[hard.eq]
+        hard_eq = hard.lower == hard.upper
+        if hard_eq.any():
+            E, e = hard.A[hard_eq], hard.lower[hard_eq]
             xp = np.linalg.lstsq(E, e, rcond=None)[0]
             gap = float(np.max(np.abs(E @ xp - e)))
-            if gap > self.spec.hard_tol * hard_scale(problem):
-                return BackendOutput(xp, Status.HARD_INFEASIBLE,
-                                     f"hard equality rows are inconsistent (gap {gap:.2e})")
+            if gap > self.spec.hard_tol * problem.hard_scale:
+                return Answer(xp, Status.HARD_INFEASIBLE,
+                              f"hard equality rows are inconsistent (gap {gap:.2e})")
             Z, _ = _null_space(E, self.rank_tol)
         frozen: list[tuple[FloatArray, FloatArray, FloatArray]] = []
         margin = self.spec.freeze_margin
@@ -314,14 +314,15 @@ class CascadeBackend:
                     return self._failure(problem, x, k)
                 x = xp + Z @ z[: Z.shape[1]]
             # freeze: inequality rows by their reached violation, equality rows by elimination
-            v = np.abs(level.violation(x))
-            ineq = ~level.eq
+            v = level.violation(x)
+            eq = level.lower == level.upper
+            ineq = ~eq
             if ineq.any():
-                scale = margin * (1.0 + np.abs(np.where(np.isfinite(level.lo[ineq]),
-                                                        level.lo[ineq], 0.0)))
-                frozen.append((level.A[ineq], level.lo[ineq] - v[ineq] - scale,
-                               level.hi[ineq] + v[ineq] + scale))
-            pinned = np.vstack((level.A[level.eq], active))
+                scale = margin * (1.0 + np.abs(np.where(np.isfinite(level.lower[ineq]),
+                                                        level.lower[ineq], 0.0)))
+                frozen.append((level.A[ineq], level.lower[ineq] - v[ineq] - scale,
+                               level.upper[ineq] + v[ineq] + scale))
+            pinned = np.vstack((level.A[eq], active))
             if pinned.shape[0] and Z.shape[1]:
                 N, _ = _null_space(pinned @ Z, self.rank_tol)
                 Z = Z @ N
@@ -329,33 +330,35 @@ class CascadeBackend:
         if Z.shape[1]:
             z = self._final(problem, xp, Z, frozen)
             if z is None:
-                return self._failure(problem, x, len(problem.levels))
+                return self._failure(problem, x, len(problem.sizes))
             x = xp + Z @ z
         x = polish_hard(problem, x)
-        return BackendOutput(x, Status.OPTIMAL, "", {"rescued_qps": self.rescued - rescued})
+        return Answer(x, Status.OPTIMAL, "", {"rescued_qps": self.rescued - rescued})
 
     def _level(self, problem: Problem, level: Any, xp: FloatArray, Z: FloatArray,
                frozen: list[tuple[FloatArray, FloatArray, FloatArray]]
                ) -> tuple[FloatArray | None, FloatArray]:
         p = Z.shape[1]
-        eq, ineq = level.eq, ~level.eq
+        eq = level.lower == level.upper
+        ineq = ~eq
+        w = level.weights if level.weights is not None else np.ones(level.m)
         q_t = int(ineq.sum())
         width = p + q_t
         P = np.zeros((width, width))
         q = np.zeros(width)
         if eq.any():
             AZ = level.A[eq] @ Z
-            r0 = level.A[eq] @ xp - level.lo[eq]
-            WA = level.w[eq][:, None] * AZ
+            r0 = level.A[eq] @ xp - level.lower[eq]
+            WA = w[eq][:, None] * AZ
             P[:p, :p] = AZ.T @ WA
             q[:p] = WA.T @ r0
         if q_t:
-            P[p:, p:] = np.diag(level.w[ineq])
+            P[p:, p:] = np.diag(w[ineq])
         rows, lb, ub = self._constraints(problem, xp, Z, width, frozen)
         if q_t:
             Ci = np.hstack((level.A[ineq] @ Z, np.eye(q_t)))
             base = level.A[ineq] @ xp
-            rows.add(Ci, level.lo[ineq] - base, level.hi[ineq] - base)
+            rows.add(Ci, level.lower[ineq] - base, level.upper[ineq] - base)
         scale = max(1.0, float(np.abs(np.diag(P)).max()))
         attempts: list[tuple[float, int, Any]] = [(self.reg, self.prox_steps, None)]
         attempts += [(self.reg, self.prox_steps, extra) for extra in self.spec.retries]
@@ -388,7 +391,7 @@ class CascadeBackend:
             z0 = np.concatenate((y0, np.zeros(q_t)))
             if q_t:
                 yi = level.A[ineq] @ (xp + Z @ y0)
-                z0[p:] = np.clip(0.0, level.lo[ineq] - yi, level.hi[ineq] - yi)
+                z0[p:] = np.clip(0.0, level.lower[ineq] - yi, level.upper[ineq] - yi)
             z, active = self._rescue(P, q, rows, lb, ub, z0)
             if z is not None and self._feasible(problem, xp + Z @ z[:p]):
                 return z, active
@@ -413,19 +416,20 @@ class CascadeBackend:
             return z
         return None
 
-    def _feasible(self, problem: Problem, x: FloatArray) -> bool:
+    @staticmethod
+    def _feasible(problem: Problem, x: FloatArray) -> bool:
         """Loose check (1e-6 relative) that a QP answer respects the hard rows before polishing."""
-        return hard_violation(problem, x) <= 1e-6 * hard_scale(problem)
+        hard = problem.hard
+        return hard_violation(x, problem.lower, problem.upper, hard.A, hard.lower,
+                              hard.upper) <= 1e-6 * problem.hard_scale
 
-    def _failure(self, problem: Problem, x: FloatArray, k: int) -> BackendOutput:
-        where = f"level {k}" if k < len(problem.levels) else "the final regularisation"
+    def _failure(self, problem: Problem, x: FloatArray, k: int) -> Answer:
+        where = f"level {k}" if k < len(problem.sizes) else "the final regularisation"
         suspect = k == 0 or not np.all(np.isfinite(x)) or not self._feasible(problem, x)
         if suspect and not hard_feasible(problem):
-            return BackendOutput(x, Status.HARD_INFEASIBLE,
-                                 "the hard box and hard rows admit no point")
-        return BackendOutput(x, Status.BACKEND_ERROR,
-                             f"{self.spec.name}: the QP of {where} failed; x solves levels < {k} "
-                             "only")
+            return Answer(x, Status.HARD_INFEASIBLE, "the hard box and hard rows admit no point")
+        return Answer(x, Status.BACKEND_ERROR,
+                      f"{self.spec.name}: the QP of {where} failed; x solves levels < {k} only")
 
 
 def _finite_abs(v: FloatArray) -> FloatArray:
@@ -437,52 +441,6 @@ def _finite_abs(v: FloatArray) -> FloatArray:
     ``np.nan_to_num``'s dozen.
     """
     return np.abs(np.where(np.isfinite(v), v, 0.0))
-
-
-def _polish_active_set(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
-                       lb: FloatArray | None, ub: FloatArray | None, z: FloatArray,
-                       act_tol: float = 1e-7) -> FloatArray:
-    """Sharpen an inexact (interior-point / ADMM) answer on its own active set.
-
-    With ``J`` the constraints within ``act_tol`` (relative) of being active at ``z``, solve the
-    equality-constrained QP ``min 0.5 z'Pz + q'z  s.t.  G_J z = h_J`` through its KKT system
-    (least squares, so dependent rows are harmless). The polished point replaces ``z`` only if it
-    is feasible (to 1e-10) and does not increase the objective, so polishing never makes an answer
-    worse. It removes the ``sqrt(mu)`` errors interior-point methods leave on degenerate optima.
-    """
-    rows, rhs = [], []
-    n = z.size
-    if G is not None and h is not None:
-        act = h - G @ z <= act_tol * (1.0 + np.abs(h))
-        rows.append(G[act])
-        rhs.append(h[act])
-    eye = np.eye(n)
-    if lb is not None:
-        act = np.isfinite(lb) & (z - lb <= act_tol * (1.0 + _finite_abs(lb)))
-        rows.append(eye[act])
-        rhs.append(lb[act])
-    if ub is not None:
-        act = np.isfinite(ub) & (ub - z <= act_tol * (1.0 + _finite_abs(ub)))
-        rows.append(eye[act])
-        rhs.append(ub[act])
-    C = np.vstack(rows) if rows else np.zeros((0, n))
-    d = np.concatenate(rhs) if rhs else np.zeros(0)
-    m = C.shape[0]
-    K = np.block([[P, C.T], [C, np.zeros((m, m))]])
-    sol = np.linalg.lstsq(K, np.concatenate((-q, d)), rcond=1e-13)[0]
-    zp = sol[:n]
-    if not np.all(np.isfinite(zp)):
-        return z
-    tol = 1e-10
-    if G is not None and h is not None and np.any(G @ zp - h > tol * (1.0 + np.abs(h))):
-        return z
-    if lb is not None and np.any(zp < lb - tol * (1.0 + _finite_abs(lb))):
-        return z
-    if ub is not None and np.any(zp > ub + tol * (1.0 + _finite_abs(ub))):
-        return z
-    f = 0.5 * z @ P @ z + q @ z
-    fp = 0.5 * zp @ P @ zp + q @ zp
-    return zp if fp <= f + 1e-12 * (1.0 + abs(f)) else z
 
 
 def _hit_iteration_cap(sol: Any) -> bool:

@@ -19,15 +19,17 @@ the hard box and rows are only checked, never enforced.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from ..._validation import FloatArray
+from ..._validation import FloatArray, as_scalar
 from ...errors import InputError
-from ..evaluate import hard_scale, hard_violation
 from ..problem import Problem
 from ..registry import SolverSpec
-from ..result import Status
-from . import BackendOutput
+from . import Answer
+
+_OPTIONS = ("rcond", "atol")
 
 
 def nullspace_solve(problem: Problem, rcond: float = 1e-10, atol: float = 0.0) -> FloatArray:
@@ -42,11 +44,11 @@ def nullspace_solve(problem: Problem, rcond: float = 1e-10, atol: float = 0.0) -
     that round-off and invert it (``x ~ 1e15``), this one gives the level zero contribution.
     A level whose rows are all zero contributes nothing either.
 
-    Trusted entry for hot loops: every level must hold equality rows only (``lo`` is used as the
-    target ``b``), the arrays are not validated, and the hard box and rows are ignored.
+    Trusted entry: every level must hold equality rows only (``lo`` is used as the target
+    ``b``), the arrays are not validated, and the hard box and rows are ignored.
 
     Args:
-        problem: A normalised problem whose levels are all equality rows.
+        problem: A problem whose levels are all equality rows.
         rcond: Cut-off relative to the Frobenius norm of each level's weighted rows ``Ã_k``.
         atol: Absolute floor of the cut-off (same units as ``Ã_k``; 0 for a purely relative
             decision, e.g. ``1e-9`` to also treat rows of norm below it as singular).
@@ -62,7 +64,7 @@ def nullspace_solve(problem: Problem, rcond: float = 1e-10, atol: float = 0.0) -
     for level in problem.levels:
         if level.m == 0:
             continue
-        d = np.sqrt(level.w)
+        d = np.sqrt(level.weights if level.weights is not None else np.ones(level.m))
         At = (d[:, None] * level.A) * w_isqrt[None, :]
         M = At @ P
         U, sv, Vt = np.linalg.svd(M, full_matrices=False)
@@ -70,52 +72,58 @@ def nullspace_solve(problem: Problem, rcond: float = 1e-10, atol: float = 0.0) -
         if not keep.any():
             continue  # no freedom left for this level (or zero rows): no contribution
         Mp = (Vt[keep].T / sv[keep]) @ U[:, keep].T
-        u = u + Mp @ (d * level.lo - At @ u)
+        u = u + Mp @ (d * level.lower - At @ u)
         P = P - Mp @ M
         P = 0.5 * (P + P.T)  # keep the projector symmetric against round-off
     return w_isqrt * u
 
 
+def inequality_rows(problem: Problem) -> tuple[int, int] | None:
+    """``(level, row)`` of the first inequality row of the levels, or None."""
+    for k, level in enumerate(problem.levels):
+        ineq = np.flatnonzero(level.lower != level.upper)
+        if ineq.size:
+            return k, int(ineq[0])
+    return None
+
+
 class NullspaceBackend:
-    """Recursive null-space projection (equality levels only).
+    """Recursive null-space projection: equality levels only, the hard set is not enforced.
+
+    The measurement reports any bound or hard row the closed form breaks.
 
     Args:
         spec: Registry entry (tolerances).
         rcond: Singular-value cut-off of the pseudoinverses relative to the norm of each
             level's unprojected rows (rank decision, see :func:`nullspace_solve`).
         atol: Absolute singular-value floor of the rank decision.
+
+    Raises:
+        InputError: a negative or non-finite ``rcond`` / ``atol``, or another option.
     """
 
-    def __init__(self, spec: SolverSpec, rcond: float = 1e-10, atol: float = 0.0) -> None:
+    def __init__(self, spec: SolverSpec, **options: Any) -> None:
+        known = ", ".join(sorted((*_OPTIONS, "hard_tol", "level_tol")))
+        for key in options:
+            if key not in _OPTIONS:
+                raise InputError(f"options: unknown option {key!r} for solver {spec.name!r} "
+                                 f"(known: {known})")
         self.spec = spec
-        self.rcond = float(rcond)
-        self.atol = float(atol)
+        self.rcond = as_scalar(options.get("rcond", 1e-10), "options['rcond']", nonnegative=True)
+        self.atol = as_scalar(options.get("atol", 0.0), "options['atol']", nonnegative=True)
 
-    def solve(self, problem: Problem) -> BackendOutput:
-        """Solve the equality hierarchy; report (not enforce) hard-row violations."""
-        for k, level in enumerate(problem.levels):
-            if not level.all_equality:
-                i = int(np.flatnonzero(~level.eq)[0])
-                raise InputError(
-                    f"levels[{k}] row {i}: the nullspace solver handles equality rows only; "
-                    "use solver='daqp' or a cascade for inequality levels")
-        x = nullspace_solve(problem, self.rcond, self.atol)
-        hv = hard_violation(problem, x)
-        if hv > self.spec.hard_tol * hard_scale(problem):
-            where = self._where(problem, x)
-            return BackendOutput(
-                x, Status.BACKEND_ERROR,
-                f"the null-space solution violates {where} by {hv:.3g}; the nullspace solver "
-                "cannot enforce bounds (use solver='daqp' or a cascade)")
-        return BackendOutput(x)
+    def reset(self) -> None:
+        """Nothing to forget (a closed form)."""
 
-    @staticmethod
-    def _where(problem: Problem, x: np.ndarray) -> str:
-        lo = problem.lower - x
-        hi = x - problem.upper
-        i_lo, i_hi = int(np.argmax(lo)), int(np.argmax(hi))
-        if lo[i_lo] > 0 and lo[i_lo] >= hi[i_hi]:
-            return f"lower bound {i_lo}"
-        if hi[i_hi] > 0:
-            return f"upper bound {i_hi}"
-        return "a hard row"
+    def solve(self, problem: Problem) -> Answer:
+        """Solve the equality hierarchy (the measurement reports any broken bound or hard row).
+
+        Raises:
+            InputError: an inequality row in a level.
+        """
+        where = inequality_rows(problem)
+        if where is not None:
+            raise InputError(
+                f"levels[{where[0]}] row {where[1]}: the nullspace solver handles equality rows "
+                "only; use solver='daqp' or a cascade for inequality levels")
+        return Answer(nullspace_solve(problem, self.rcond, self.atol))

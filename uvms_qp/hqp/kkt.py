@@ -1,4 +1,4 @@
-"""Optimality certificates for the QPs of a cascade: active-set polish plus a KKT check.
+"""One QP's optimality: the KKT check, the active-set polish and the exact active-set solve.
 
 Inexact back-ends (ADMM, interior-point, HiGHS) stop at a tolerance, and their own "solved" is
 not a proof. For one level's QP
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import nnls
 
-from ..._validation import FloatArray
+from .._validation import FloatArray
 
 #: relative feasibility tolerance of a certified point, ``G z - h <= FEAS_TOL (1 + |h|)``
 FEAS_TOL = 1e-10
@@ -115,9 +115,15 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     return Certificate(z, lam, lam_box, stat)
 
 
-def _kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray
-               ) -> tuple[FloatArray, FloatArray]:
-    """Solve ``min 0.5 z'Pz + q'z s.t. C z = d`` through its KKT system (least squares)."""
+def kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray
+              ) -> tuple[FloatArray, FloatArray]:
+    """Solve ``min 0.5 z'Pz + q'z s.t. C z = d`` through its KKT system (least squares).
+
+    Least squares (``rcond`` 1e-13) makes dependent rows of ``C`` and a singular ``P`` harmless.
+
+    Returns:
+        ``(z, mu)``: the point and the multipliers of the rows of ``C``.
+    """
     n, m = q.size, C.shape[0]
     K = np.block([[P, C.T], [C, np.zeros((m, m))]])
     sol = np.linalg.lstsq(K, np.concatenate((-q, d)), rcond=1e-13)[0]
@@ -160,7 +166,7 @@ def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
             if key in tried:
                 break
             tried.append(key)
-            zp, mu = _kkt_point(P, q, all_rows[work], all_rhs[work])
+            zp, mu = kkt_point(P, q, all_rows[work], all_rhs[work])
             if not np.all(np.isfinite(zp)):
                 break
             if feasible(G, h, lb, ub, zp):
@@ -223,13 +229,10 @@ def active_set_from(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
             return cert
         C = rows[work]
         m = C.shape[0]
-        K = np.block([[P, C.T], [C, np.zeros((m, m))]])
-        # the step also lands exactly on the working constraints (they may start 1e-9 away)
-        rhs_k = np.concatenate((-(P @ z + q), rhs[work] - C @ z))
-        sol = np.linalg.lstsq(K, rhs_k, rcond=1e-13)[0]
-        if not np.all(np.isfinite(sol)):
+        # the step p also lands exactly on the working constraints (they may start 1e-9 away)
+        p, mu = kkt_point(P, P @ z + q, C, rhs[work] - C @ z)
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(mu))):
             return None
-        p, mu = sol[:n], sol[n:]
         if np.abs(p).max(initial=0.0) <= 1e-12 * max(1.0, float(np.abs(z).max(initial=0.0))):
             if not m or mu.min() >= 0.0:
                 return None  # stationary on the working set yet not certified: give up

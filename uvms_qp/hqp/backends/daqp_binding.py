@@ -1,19 +1,21 @@
-"""DAQP's C entry points called directly, for the per-tick hot path.
+"""DAQP behind one small interface: direct C calls where possible, ``daqp.Model`` otherwise.
 
-DAQP's Python extension carries the whole C library and exports its symbols (``setup_daqp_main``,
-``daqp_update_ldp``, ``daqp_solve``...). :class:`NativeDaqp` calls them through :mod:`ctypes` on
-arrays the caller owns and fills in place: an update is one C call that re-reads the rows and
-sides, a solve is one C call that writes ``x`` into a buffer, with no argument conversion, copy
-or dictionary per call. It offers the subset of ``daqp.Model`` that the back-end uses
-(``setup``, ``update``, ``solve``, ``settings``) plus the allocation-free pair :meth:`refresh` /
-:meth:`solve_in_place`.
+The DAQP back-end (:mod:`uvms_qp.hqp.backends.daqp`) sets a problem up once per structure and
+then, every solve, writes the rows, sides and per-row soft weights into arrays it owns and asks
+DAQP to take them over and solve. :func:`open_daqp` returns an object with that interface:
 
-The structures below mirror DAQP's ``types.h`` and ``api.h`` of the versions listed in
-:data:`SUPPORTED_VERSIONS` (the workspace only up to the fields read here). For any other
-installed version, on a platform whose extension does not export the symbols, or when the
-start-up check fails (the settings DAQP allocates must equal its documented defaults, and a small
-hierarchical problem must give ``daqp.Model``'s answer bit for bit), :func:`native_available` is
-False and callers use ``daqp.Model``: same answers, a few microseconds slower.
+* :class:`NativeDaqp` calls DAQP's C entry points (``setup_daqp_main``, ``daqp_update_ldp``,
+  ``daqp_solve``...), which its Python extension exports, through :mod:`ctypes` on the caller's
+  arrays: a refresh is one C call that re-reads rows, sides and soft weights, a solve one C call
+  that writes ``x`` into a buffer; no argument conversion, copy or dictionary per call. Its
+  structures mirror DAQP's ``types.h`` and ``api.h`` of the versions in
+  :data:`SUPPORTED_VERSIONS` (the workspace only up to the fields read here).
+* :class:`ModelDaqp` does the same through ``daqp.Model`` (one ``update`` and one
+  ``soft_weights`` call per refresh): same answers, a few microseconds slower. It serves for any
+  other installed version, on a platform whose extension does not export the symbols, or when
+  the start-up check of :func:`native_available` fails (the settings DAQP allocates must equal
+  its documented defaults, and a small hierarchical problem must give ``daqp.Model``'s answer
+  bit for bit).
 """
 
 from __future__ import annotations
@@ -21,11 +23,11 @@ from __future__ import annotations
 import ctypes as C
 import importlib.metadata
 from functools import cache
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from .._validation import FloatArray
+from ..._validation import FloatArray
 
 SUPPORTED_VERSIONS: tuple[str, ...] = ("0.11.0",)
 """DAQP versions whose C structure layout is mirrored here."""
@@ -137,14 +139,63 @@ def native_available() -> bool:
     return _self_check(lib)
 
 
+
+class DaqpBinding(Protocol):
+    """The interface of :class:`NativeDaqp` and :class:`ModelDaqp`.
+
+    Attributes:
+        x: Primal solution of the latest solve (may be a reused buffer: copy to keep).
+        solve_time: DAQP's own time of the latest solve [s].
+        iterations: Iterations of the latest solve.
+    """
+
+    x: FloatArray
+    solve_time: float
+    iterations: int
+
+    def setup(self, H: FloatArray, f: FloatArray, A: FloatArray, bupper: FloatArray,
+              blower: FloatArray, sense: np.ndarray, break_points: np.ndarray
+              ) -> tuple[int, float]:
+        """Set a problem up on these arrays (kept: later refreshes re-read them in place).
+
+        Returns:
+            ``(exit flag, setup time [s])``; a negative flag means nothing else may be called.
+        """
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """DAQP's settings (assign a dict to change some)."""
+
+    @settings.setter
+    def settings(self, new: dict[str, Any]) -> None: ...
+
+    def soft_weights(self, rho: FloatArray) -> bool:
+        """Set the per-constraint reciprocal soft weights (both sides); False if unsupported."""
+
+    def soft_weight_views(self) -> tuple[FloatArray, FloatArray] | None:
+        """Arrays of per-constraint soft weights taken over by :meth:`refresh` (or None)."""
+
+    def refresh(self) -> int:
+        """Hand the rows, sides and soft weights written in place to DAQP (warm start kept)."""
+
+    def restart(self, sense: np.ndarray) -> int:
+        """Start the next solve cold, from the working set ``sense``."""
+
+    def solve(self) -> int:
+        """Solve; returns the exit flag (1 optimal, 2 soft optimal, negative on failure)."""
+
+
+def open_daqp() -> DaqpBinding:
+    """A fresh DAQP binding: :class:`NativeDaqp` when available, else :class:`ModelDaqp`."""
+    return NativeDaqp() if native_available() else ModelDaqp()
+
+
 def _self_check(lib: Any) -> bool:
     """Defaults read through the mirrored layout, and one hierarchical solve vs ``daqp.Model``."""
-    import daqp
-
     expected = _Settings()
     lib.daqp_default_settings(C.byref(expected))
     probe = NativeDaqp(lib)
-    read = probe._work_view.settings
+    read = probe._view.settings
     if not read or any(getattr(read.contents, k) != getattr(expected, k) for k in _SETTING_NAMES):
         return False
     rng = np.random.default_rng(7)
@@ -157,13 +208,11 @@ def _self_check(lib: Any) -> bool:
     H, f = np.diag(np.linspace(1.0, 2.0, n)), np.zeros(n)
     sense = np.zeros(n + sum(sizes), dtype=np.intc)
     answers = []
-    for model in (probe, daqp.Model()):
-        model.setup(H, f, A, bu.copy(), bl.copy(), sense.copy(), break_points=bp)
-        settings = model.settings
-        settings["rho_soft"] = 1e-8
-        model.settings = settings
-        x, _, flag, _ = model.solve()
-        answers.append((flag, x))
+    for binding in (probe, ModelDaqp()):
+        binding.setup(H, f, A.copy(), bu.copy(), bl.copy(), sense.copy(), bp)
+        binding.settings = {"rho_soft": 1e-8}
+        flag = binding.solve()
+        answers.append((flag, binding.x.copy()))
     (f1, x1), (f2, x2) = answers
     return bool(f1 == f2 and f1 in (1, 2) and np.array_equal(x1, x2))
 
@@ -188,33 +237,28 @@ class NativeDaqp:
     """A DAQP workspace driven through its C API (see the module docstring).
 
     Arrays passed to :meth:`setup` are used in place when they are C-contiguous of the right
-    type (float64, or C int for ``sense`` and ``break_points``): after writing new values into
-    them, :meth:`refresh` hands them to DAQP. Results are written into :attr:`x`.
+    type (float64, or C int for ``sense`` and ``break_points``).
 
     Args:
         lib: The loaded library (default: DAQP's extension); for the start-up check only.
-
-    Attributes:
-        x: Primal solution of the latest solve (a reused buffer).
-        solve_time: DAQP's own solve time of the latest solve [s].
-        iterations: Iterations of the latest solve.
     """
 
     def __init__(self, lib: Any = None) -> None:
         self._lib = lib if lib is not None else _library()
         self._work: Any = C.create_string_buffer(_WORK_BYTES)
-        self._work_view = _Workspace.from_buffer(self._work)
+        self._view = _Workspace.from_buffer(self._work)
         self._lib.allocate_daqp_settings(self._work)
         self._qp = _Problem()
         self._qp_ref = C.byref(self._qp)
         self._held: tuple[np.ndarray, ...] = ()
         self._sense = np.zeros(0, dtype=np.intc)
         self._has_model = False
-        self._has_solved = False
+        self._warm = False  # qp.sense points at the working set of the latest solve
         self.x = np.zeros(0)
         self._lam = np.zeros(0)
         self._res = _Result()
         self._res_ref = C.byref(self._res)
+        self._mask = C.c_int(UPDATE_M | UPDATE_D | UPDATE_SENSE)
         self.solve_time = 0.0
         self.iterations = 0
 
@@ -227,31 +271,21 @@ class NativeDaqp:
             lib.free_daqp_workspace(work)
             lib.free_daqp_ldp(work)
         else:
-            settings = self._work_view.settings
+            settings = self._view.settings
             if settings:
                 _libc_free(C.cast(settings, _VP))
         self._work = None
 
-    # ------------------------------------------------------------------------------ set-up
-    def setup(self, H: Any, f: Any, A: Any, bupper: Any, blower: Any, sense: Any,
-              break_points: Any) -> tuple[int, float]:
-        """Set the problem up (``daqp.Model.setup`` semantics); returns ``(flag, setup_time)``.
-
-        Args:
-            H: Hessian (n, n).
-            f: Linear cost (n,).
-            A: General rows (m - n, n).
-            bupper: Upper sides (m,): the n simple bounds, then the rows.
-            blower: Lower sides (m,).
-            sense: Constraint flags (m,) (C int).
-            break_points: Hierarchy break points (C int).
-        """
+    def setup(self, H: FloatArray, f: FloatArray, A: FloatArray, bupper: FloatArray,
+              blower: FloatArray, sense: np.ndarray, break_points: np.ndarray
+              ) -> tuple[int, float]:
+        """``daqp.Model.setup`` on arrays kept in place; returns ``(flag, setup_time)``."""
         H, f, A = _contiguous(H, np.float64), _contiguous(f, np.float64), _contiguous(A, np.float64)
         bu, bl = _contiguous(bupper, np.float64), _contiguous(blower, np.float64)
         sense = _contiguous(sense, np.intc)
         bp = _contiguous(break_points, np.intc)
         n, m = f.shape[0], bu.shape[0]
-        lib, work, view = self._lib, self._work, self._work_view
+        lib, work, view = self._lib, self._work, self._view
         saved = _Settings.from_buffer_copy(view.settings.contents)
         if self._has_model:  # a new structure: start from a clean workspace, same settings
             lib.free_daqp_workspace(work)  # also frees the settings
@@ -266,12 +300,13 @@ class NativeDaqp:
         qp.bupper, qp.blower = _ptr(bu), _ptr(bl)
         qp.sense, qp.break_points = _ptr(sense, _IP), _ptr(bp, _IP)
         qp.nh, qp.problem_type = bp.shape[0], 0
+        self._warm = False
         setup_time = C.c_double(0.0)
         flag = int(lib.setup_daqp_main(self._qp_ref, work, C.byref(setup_time), 0))
         if flag < 0:  # DAQP freed the workspace and its settings
             self._reset_workspace(saved)
             return flag, float(setup_time.value)
-        self._has_model, self._has_solved = True, False
+        self._has_model = True
         self.x = np.zeros(n)
         self._lam = np.zeros(m)
         self._res.x, self._res.lam = _ptr(self.x), _ptr(self._lam)
@@ -281,18 +316,17 @@ class NativeDaqp:
         """Zero the (freed) workspace and give it fresh settings equal to ``settings``."""
         C.memset(self._work, 0, _WORK_BYTES)
         self._lib.allocate_daqp_settings(self._work)
-        self._work_view.settings[0] = settings
+        self._view.settings[0] = settings
 
-    # ------------------------------------------------------------------------------ settings
     @property
     def settings(self) -> dict[str, Any]:
         """Current settings as a dict (``daqp.Model.settings``); assign a dict to change some."""
-        s = self._work_view.settings.contents
+        s = self._view.settings.contents
         return {k: getattr(s, k) for k in _SETTING_NAMES}
 
     @settings.setter
     def settings(self, new: dict[str, Any]) -> None:
-        s = self._work_view.settings.contents
+        s = self._view.settings.contents
         old = (s.rho_soft, s.w_soft)
         for key, value in new.items():
             if key in _SETTING_NAMES:
@@ -300,114 +334,125 @@ class NativeDaqp:
         if self._has_model and (s.rho_soft, s.w_soft) != old:
             self._lib.daqp_refresh_soft_weights(self._work)
 
-    # ------------------------------------------------------------------------------ per call
-    def update(self, A: Any = None, bupper: Any = None, blower: Any = None,
-               sense: Any = None) -> int:
-        """``daqp.Model.update`` for the rows, sides and sense; returns DAQP's exit flag.
+    def soft_weights(self, rho: FloatArray) -> bool:
+        """Copy ``rho`` (one entry per constraint, C-contiguous float64) to both sides."""
+        ptr = _ptr(rho)
+        return bool(self._lib.daqp_set_soft_weights(self._work, ptr, ptr, None, None))
 
-        Arrays that are not the ones given at set-up are copied into those (same shapes).
-        Without ``sense``, a change of the rows keeps the working set of the previous solve
-        (warm start); an explicit ``sense`` replaces it (e.g. a cold start).
+    def soft_weight_views(self) -> tuple[FloatArray, FloatArray] | None:
+        """DAQP's own per-constraint ``rho`` arrays (lower, upper sides) as numpy views.
+
+        Values written into them take effect at the next :meth:`refresh` (which rebuilds the
+        factorisation with them). Valid until the next :meth:`setup`; None on a DAQP built
+        without per-constraint weights.
         """
-        _, _, A0, bu, bl, s0, _ = self._held
-        mask = 0
-        if A is not None:
-            if A is not A0:
-                A0[...] = A
-            mask |= UPDATE_M
-        if bupper is not None:
-            if bupper is not bu:
-                bu[...] = bupper
-            mask |= UPDATE_D
-        if blower is not None:
-            if blower is not bl:
-                bl[...] = blower
-            mask |= UPDATE_D
-        qp = self._qp
-        if sense is not None:
-            s0[...] = sense
-            qp.sense = _ptr(s0, _IP)
-            mask |= UPDATE_SENSE
-        elif mask & UPDATE_M:
-            qp.sense = self._work_view.sense if self._has_solved else _ptr(s0, _IP)
-            mask |= UPDATE_SENSE
-        return int(self._lib.daqp_update_ldp(mask, self._work, self._qp_ref))
-
-    def soft_weights(self, rho_l: Any = None, rho_u: Any = None) -> None:
-        """Per-constraint reciprocal quadratic soft weights (``daqp.Model.soft_weights``).
-
-        One entry per constraint (simple bounds first), in the scale of the original problem;
-        0 selects ``rho_soft``. The values are copied into the workspace.
-
-        Raises:
-            ValueError: an array of the wrong length.
-            RuntimeError: a DAQP build without per-constraint soft weights.
-        """
+        if not self._has_model or not self._lib.daqp_allocate_soft_weights(self._work):
+            return None
         m = self._qp.m
-        kept: list[np.ndarray] = []  # alive until the C call has copied the values
-        ptrs: list[Any] = []
-        for value in (rho_l, rho_u):
-            if value is None:
-                ptrs.append(None)
-                continue
-            arr = _contiguous(value, np.float64)
-            if arr.shape != (m,):
-                raise ValueError(f"soft weights: expected {m} entries, got {arr.shape}")
-            kept.append(arr)
-            ptrs.append(_ptr(arr))
-        lo, hi = ptrs
-        if not self._lib.daqp_set_soft_weights(self._work, lo, hi, None, None):
-            raise RuntimeError("daqp was built without per-constraint soft weights")
-
-    def soft_weight_arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """The workspace's own per-constraint ``rho`` arrays (lower, upper sides) as numpy views.
-
-        Values written into them take effect at the next :meth:`refresh` or :meth:`update`
-        (which rebuild the factorisation with them), without a call of their own. The views
-        are valid until the next :meth:`setup`.
-
-        Raises:
-            RuntimeError: no model is set up, or a DAQP build without per-constraint weights.
-        """
-        if not self._has_model:
-            raise RuntimeError("soft_weight_arrays: set a problem up first")
-        if not self._lib.daqp_allocate_soft_weights(self._work):
-            raise RuntimeError("daqp was built without per-constraint soft weights")
-        m = self._qp.m
-        view = self._work_view
+        view = self._view
         return (np.ctypeslib.as_array(view.rho_ls, shape=(m,)),
                 np.ctypeslib.as_array(view.rho_us, shape=(m,)))
 
-    def soft_weights_in_place(self, rho: np.ndarray) -> None:
-        """:meth:`soft_weights` with the same ``rho`` on both sides, no checks (hot path).
-
-        ``rho`` must be a C-contiguous float64 array of one entry per constraint.
-        """
-        ptr = _ptr(rho)
-        self._lib.daqp_set_soft_weights(self._work, ptr, ptr, None, None)
-
     def refresh(self) -> int:
-        """Hand the set-up arrays (rows and sides written in place) to DAQP; warm start kept."""
-        self._qp.sense = self._work_view.sense if self._has_solved else _ptr(self._sense, _IP)
-        return int(self._lib.daqp_update_ldp(UPDATE_M | UPDATE_D | UPDATE_SENSE, self._work,
-                                             self._qp_ref))
+        """Hand the set-up arrays (rows, sides, weights written in place) to DAQP."""
+        return int(self._lib.daqp_update_ldp(self._mask, self._work, self._qp_ref))
 
-    def solve_in_place(self) -> int:
-        """Solve and return DAQP's exit flag (1 optimal, 2 soft optimal, negative on failure).
+    def restart(self, sense: np.ndarray) -> int:
+        """Cold start: the next solve starts from the working set ``sense``."""
+        self._sense[...] = sense
+        self._qp.sense = _ptr(self._sense, _IP)
+        self._warm = False
+        return int(self._lib.daqp_update_ldp(UPDATE_SENSE, self._work, self._qp_ref))
 
-        Sets ``x`` (a reused buffer), ``solve_time`` and ``iterations``.
-        """
+    def solve(self) -> int:
+        """Solve; returns DAQP's exit flag and sets ``x`` (a reused buffer), time, iterations."""
         res = self._res
         self._lib.daqp_solve(self._res_ref, self._work)
-        self._has_solved = True
+        if not self._warm:  # later refreshes keep the working set of this solve
+            self._qp.sense = self._view.sense
+            self._warm = True
         self.solve_time = res.solve_time
         self.iterations = res.iter
         return int(res.exitflag)
 
-    def solve(self) -> tuple[FloatArray, float, int, dict[str, Any]]:
-        """``daqp.Model.solve``: ``(x, fval, exitflag, info)`` with fresh arrays."""
-        flag = self.solve_in_place()
-        info = {"solve_time": self.solve_time, "setup_time": 0.0,
-                "iterations": self.iterations, "nodes": self._res.nodes,
-                "lam": self._lam.copy()}
-        return self.x.copy(), float(self._res.fval), flag, info
+
+class ModelDaqp:
+    """:class:`DaqpBinding` through ``daqp.Model`` (see the module docstring)."""
+
+    def __init__(self) -> None:
+        import daqp
+
+        self._model = daqp.Model()
+        self._held: tuple[np.ndarray, ...] = ()
+        self._rho: tuple[FloatArray, FloatArray] | None = None
+        self.x = np.zeros(0)
+        self.solve_time = 0.0
+        self.iterations = 0
+
+    def setup(self, H: FloatArray, f: FloatArray, A: FloatArray, bupper: FloatArray,
+              blower: FloatArray, sense: np.ndarray, break_points: np.ndarray
+              ) -> tuple[int, float]:
+        """``daqp.Model.setup``; the arrays are kept and handed over again by :meth:`refresh`."""
+        self._held = (A, bupper, blower)
+        m = bupper.shape[0]
+        self._rho = None
+        flag, setup_time = self._model.setup(H, f, A, bupper, blower, sense,
+                                             break_points=break_points)
+        if flag >= 0 and self._supports_soft_weights():
+            self._rho = (np.zeros(m), np.zeros(m))
+        return int(flag), float(setup_time)
+
+    def _supports_soft_weights(self) -> bool:
+        """The binding has ``soft_weights`` and DAQP was built with them (checked once)."""
+        setter = getattr(self._model, "soft_weights", None)
+        if setter is None:
+            return False
+        try:
+            setter()  # no arrays: changes nothing, refused by a build without them
+        except RuntimeError:
+            return False
+        return True
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """``daqp.Model.settings``."""
+        return dict(self._model.settings)
+
+    @settings.setter
+    def settings(self, new: dict[str, Any]) -> None:
+        current = self._model.settings
+        current.update(new)
+        self._model.settings = current
+
+    def soft_weights(self, rho: FloatArray) -> bool:
+        """``daqp.Model.soft_weights`` with ``rho`` on both sides; False if unsupported."""
+        if self._rho is None:
+            return False
+        self._rho[0][:] = rho  # kept: the next refresh hands them over again
+        self._rho[1][:] = rho
+        self._model.soft_weights(rho_l=rho, rho_u=rho)
+        return True
+
+    def soft_weight_views(self) -> tuple[FloatArray, FloatArray] | None:
+        """Own arrays of soft weights, handed to DAQP by :meth:`refresh`."""
+        return self._rho
+
+    def refresh(self) -> int:
+        """``daqp.Model.update`` of rows and sides, then the soft weights."""
+        A, bu, bl = self._held
+        flag = int(self._model.update(A=A, bupper=bu, blower=bl))
+        if self._rho is not None:
+            self._model.soft_weights(rho_l=self._rho[0], rho_u=self._rho[1])
+        return flag
+
+    def restart(self, sense: np.ndarray) -> int:
+        """``daqp.Model.update(sense=...)``: the next solve starts cold."""
+        return int(self._model.update(sense=sense))
+
+    def solve(self) -> int:
+        """``daqp.Model.solve``: sets ``x`` (fresh), time and iterations; returns the flag."""
+        x, _, flag, info = self._model.solve()
+        self.x = x
+        self.solve_time = float(info["solve_time"])
+        self.iterations = int(info["iterations"])
+        return int(flag)

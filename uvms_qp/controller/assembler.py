@@ -1,0 +1,226 @@
+"""The stack assembler: a bound stack written straight into one problem's buffers every tick."""
+
+from __future__ import annotations
+
+from operator import attrgetter, is_
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._validation import FloatArray
+from ..errors import BoundsError, InputError, NonFiniteError
+from ..hqp import Problem
+from ..hqp.validate import finite_ok
+from ..rows import Rows
+from ..safety import SafeSolve
+from ..stack import Stack
+from ..tasks.task import Task
+from .result import StepResult, TaskErrors, TaskLayout, TaskResiduals
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model, State
+
+_ROW_WEIGHTS = attrgetter("row_weights")
+_LAST_ERROR = attrgetter("last_error")
+
+
+def not_a_state(value: Any) -> InputError:
+    """The error for a ``step`` called with something other than a model :class:`State`.
+
+    A configuration array is the usual mistake: the message says how to make the state.
+    """
+    kind = type(value).__module__ + "." + type(value).__qualname__
+    if kind.startswith("builtins."):
+        kind = type(value).__qualname__
+    return InputError(
+        f"state: step expects a State, got {kind}; build one from a configuration q with "
+        "model.state(q)"
+    )
+
+
+class StackAssembler:
+    """Binds a stack to a model and fills one :class:`~uvms_qp.hqp.Problem` with it every tick.
+
+    Each task writes its rows straight into its slice of ``problem.A`` / ``lo`` / ``hi``; box
+    constraints intersect their box into the first n rows (static boxes merged once); row
+    constraints write the hard rows. Row weights are re-read only when a task hands out a new
+    ``row_weights`` array. Nothing is allocated per tick.
+
+    Args:
+        model: The UVMS model.
+        stack: Levels of tasks and hard constraints (bound to ``model`` here).
+        dt: Control period [s] (turns position limits into rate bounds).
+        metric: Diagonal W (nv,) of the final regularisation (validated).
+
+    Attributes:
+        problem: The problem the stack is written into.
+        tasks: All tasks, highest priority first.
+        layout: Where each task's rows sit (for the per-task reports).
+        level_names: Task names of each level.
+        weights_version: Incremented whenever a row weight changed.
+
+    Raises:
+        InputError: any binding error of the stack, with its location.
+        BoundsError: the static boxes of the constraints do not intersect.
+    """
+
+    def __init__(self, model: Model, stack: Stack, dt: float, metric: FloatArray) -> None:
+        self.model = model
+        self.stack = stack.bind(model)
+        self.dt = dt
+        nv = int(model.nv)
+        self.nv = nv
+        levels = self.stack.levels
+        self.tasks: tuple[Task, ...] = tuple(t for level in levels for t in level)
+        row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
+        mh = sum(c.rows_dim for c in row_cons)
+        self.problem = problem = Problem(nv, mh, [sum(t.dim for t in lv) for lv in levels], metric)
+        A, lo, hi = problem.A, problem.lo, problem.hi
+        spans, r = [], problem.head
+        for task in self.tasks:
+            spans.append((r, r + task.dim))
+            r += task.dim
+        self._slots = [(task, A[a:b], lo[a:b], hi[a:b]) for task, (a, b) in zip(
+            self.tasks, spans, strict=True)]
+        self._row_slots = []
+        r = nv
+        for c in row_cons:
+            self._row_slots.append((c, A[r:r + c.rows_dim], lo[r:r + c.rows_dim],
+                                    hi[r:r + c.rows_dim]))
+            r += c.rows_dim
+        self._box_cons = [c for c in self.stack.constraints if c.has_box]
+        self._dynamic_box = [c for c in self._box_cons if not c.is_static]
+        self._box = problem.sides[:, :nv]
+        self._lower, self._upper = self._box  # views
+        self._static_box = np.empty((2, nv))
+        self._static_box[0], self._static_box[1] = -np.inf, np.inf
+        for c in self._box_cons:
+            if c.is_static:
+                c.fill_box(None, dt, self._static_box[0], self._static_box[1])  # type: ignore[arg-type]
+        self._box[...] = self._static_box
+        if (self._static_box[0] > self._static_box[1]).any():
+            self._raise_empty_box(None)
+        self._weight_refs: list[FloatArray | None] = [None] * len(self.tasks)
+        self.weights_version = 0
+        head = problem.head
+        self._weight_rows = [slice(a - head, b - head) for a, b in spans]
+        self.level_names = tuple(level.names for level in levels)
+        self.layout = TaskLayout(tuple(t.name for t in self.tasks), tuple(spans),
+                                 tuple(t.rate_unit for t in self.tasks),
+                                 tuple(t.error_unit for t in self.tasks))
+
+    # ---------------------------------------------------------------------------- per tick
+    def fill(self, state: State, t: float) -> Problem:
+        """Write the rows, weights, box and hard rows at ``(state, t)`` into :attr:`problem`.
+
+        Raises:
+            InputError: ``state`` is not a State of this model (e.g. a configuration array).
+            NonFiniteError: a task or constraint produced NaN/inf rows (the message names it).
+        """
+        try:  # a try block costs nothing on the happy path
+            if state.model is not self.model:
+                raise InputError("state: belongs to another model than the controller's")
+        except AttributeError:
+            raise not_a_state(state) from None
+        for task, A, lo, hi in self._slots:
+            task.fill(state, t, A, lo, hi)
+        if not all(map(is_, map(_ROW_WEIGHTS, self.tasks), self._weight_refs)):
+            self._refresh_weights()
+        self._box[...] = self._static_box
+        if self._dynamic_box:
+            lower, upper, dt = self._lower, self._upper, self.dt
+            for c in self._dynamic_box:
+                c.fill_box(state, dt, lower, upper)
+        for c, HA, Hlo, Hhi in self._row_slots:
+            c.fill_rows(state, self.dt, HA, Hlo, Hhi)
+        problem = self.problem
+        if not finite_ok(problem):
+            self._diagnose(state)
+        return problem
+
+    def check_box(self, state: State) -> None:
+        """Raise BoundsError naming the constraints when this tick's box is empty.
+
+        Asked after a step whose hard set was found empty (an empty box is no bad number: the
+        back-ends see it and report it, and this names the culprits).
+        """
+        lower, upper = self._box
+        if (lower > upper).any():
+            self._raise_empty_box(state)
+
+    def _refresh_weights(self) -> None:
+        problem = self.problem
+        for k, task in enumerate(self.tasks):
+            rw = task.row_weights
+            if rw is not self._weight_refs[k]:
+                problem.set_weights(rw, self._weight_rows[k])
+                self._weight_refs[k] = rw
+        self.weights_version += 1
+
+    def step_result(self, out: SafeSolve, t: float, step_time: float, scheme: str,
+                    solver: str) -> StepResult:
+        """The step result of a ladder outcome (reports read lazily from its slacks)."""
+        result = out.result
+        box = result.box
+        return StepResult(
+            out.x, result.status, result, t, step_time, scheme, solver,
+            box[0], box[1], out.clip_flagged, self.level_names, out.stage, out.clipped,
+            out.deadline_missed, out.attempts, TaskResiduals(self.layout, result),
+            TaskErrors(self.layout, tuple(map(_LAST_ERROR, self.tasks))))
+
+    # ------------------------------------------------------------------------- inspection
+    def level_rows(self, state: State, t: float = 0.0) -> list[Rows]:
+        """Rows of every level at ``(state, t)`` (fresh copies)."""
+        problem = self.fill(state, float(t))
+        out = []
+        for k in range(len(problem.sizes)):
+            rows = problem.level(k)
+            out.append(Rows(rows.A.copy(), rows.lower.copy(), rows.upper.copy(),
+                            None if rows.weights is None else rows.weights.copy(), f"level {k}"))
+        return out
+
+    def bounds(self, state: State) -> tuple[FloatArray, FloatArray]:
+        """Merged hard box ``(lower, upper)`` on zeta at ``state`` (copies)."""
+        self._box[...] = self._static_box
+        lower, upper = self._box
+        for c in self._dynamic_box:
+            c.fill_box(state, self.dt, lower, upper)
+        if (lower > upper).any():
+            self._raise_empty_box(state)
+        return lower.copy(), upper.copy()
+
+    # ---------------------------------------------------------------------------- errors
+    def _diagnose(self, state: State) -> None:
+        """Raise the error naming the task or constraint whose output is bad.
+
+        Returns normally when every entry is legitimate (the reductions of
+        :func:`~uvms_qp.hqp.validate.finite_ok` overflowed on large finite values).
+        """
+        named: list[tuple[str, FloatArray, FloatArray, FloatArray]] = [
+            *[(f"task {task.name!r}", A, lo, hi) for task, A, lo, hi in self._slots],
+            *[(f"constraint {c.name!r}", A, lo, hi) for c, A, lo, hi in self._row_slots]]
+        for who, A, lo, hi in named:
+            if not np.isfinite(A).all():
+                raise NonFiniteError(f"{who} produced non-finite rows")
+            if np.isnan(lo).any() or np.isposinf(lo).any() or np.isnan(hi).any() or (
+                    np.isneginf(hi).any()):
+                raise NonFiniteError(
+                    f"{who} produced a non-finite target side (NaN, a +inf lower or a -inf upper "
+                    "side; e.g. a gain times an error that overflowed)")
+            if (lo > hi).any():
+                i = int(np.flatnonzero(lo > hi)[0])
+                raise BoundsError(f"{who} produced row {i} with lower side {lo[i]:.6g} > upper "
+                                  f"side {hi[i]:.6g}")
+
+    def _raise_empty_box(self, state: State | None) -> None:
+        lower, upper = self._box if state is not None else self._static_box
+        i = int(np.flatnonzero(lower > upper)[0])
+        parts = []
+        for c in self._box_cons:
+            if state is None and not c.is_static:
+                continue
+            lo, hi = c.box(state, self.dt)  # type: ignore[arg-type]
+            if np.isfinite(lo[i]) or np.isfinite(hi[i]):
+                parts.append(f"{c.name} gives [{lo[i]:.4g}, {hi[i]:.4g}]")
+        name = self.model.zeta_names[i]
+        raise BoundsError(f"hard box on zeta[{i}] ({name}) is empty: " + "; ".join(parts))

@@ -1,0 +1,189 @@
+"""The outcome of one control step, for every scheme: :class:`StepResult`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+
+import numpy as np
+
+from .._validation import FloatArray
+from ..hqp import HierarchyResult, Status, hard_violation
+from ..hqp.result import OK_STATUSES
+
+Report = Mapping[str, tuple[float, str]]
+"""Task name -> (value, unit)."""
+
+
+class TaskLayout:
+    """Where each task's rows sit in a stacked problem, with the units of its reports.
+
+    Args:
+        names: Task names, highest priority first.
+        spans: ``(start, end)`` of each task's rows in the stacked rows of the problem.
+        rate_units: Unit of each task's rows (e.g. ``"m/s"``).
+        error_units: Unit of each task's error or objective (e.g. ``"m"``).
+    """
+
+    __slots__ = ("error_units", "names", "rate_units", "spans")
+
+    def __init__(self, names: tuple[str, ...], spans: tuple[tuple[int, int], ...],
+                 rate_units: tuple[str, ...], error_units: tuple[str, ...]) -> None:
+        self.names, self.spans = names, spans
+        self.rate_units, self.error_units = rate_units, error_units
+
+
+class _Lazy(Mapping[str, tuple[float, str]]):
+    """A read-only report computed on first access (most steps never read it)."""
+
+    __slots__ = ("_data", "_layout", "_source")
+
+    def __init__(self, layout: TaskLayout, source: object) -> None:
+        self._layout, self._source = layout, source
+        self._data: dict[str, tuple[float, str]] | None = None
+
+    def _compute(self) -> dict[str, tuple[float, str]]:
+        raise NotImplementedError
+
+    def _values(self) -> dict[str, tuple[float, str]]:
+        if self._data is None:
+            self._data = self._compute()
+        return self._data
+
+    def __getitem__(self, key: str) -> tuple[float, str]:
+        return self._values()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values())
+
+    def __len__(self) -> int:
+        return len(self._layout.names)
+
+    def __repr__(self) -> str:
+        return repr(self._values())
+
+
+class TaskResiduals(_Lazy):
+    """Task name -> (norm of its row violation at the command, unit of its rows) [rate unit].
+
+    Read from the slacks of the hierarchy result (no second product with the rows).
+    """
+
+    __slots__ = ()
+
+    def _compute(self) -> dict[str, tuple[float, str]]:
+        s = self._source.slacks  # type: ignore[attr-defined]
+        layout = self._layout
+        return {name: (math.sqrt(float(s[a:b] @ s[a:b])), unit) for name, (a, b), unit in
+                zip(layout.names, layout.spans, layout.rate_units, strict=True)}
+
+
+class TaskErrors(_Lazy):
+    """Task name -> (norm of its error or objective value this tick, unit); NaN if none."""
+
+    __slots__ = ()
+
+    def _compute(self) -> dict[str, tuple[float, str]]:
+        layout = self._layout
+        return {name: (float(np.sqrt(e @ e)) if e is not None else math.nan, unit)
+                for name, e, unit in zip(layout.names, self._source,  # type: ignore[call-overload]
+                                         layout.error_units, strict=True)}
+
+
+class StepResult:
+    """Outcome of one control tick; never None, ``zeta`` always finite.
+
+    Args and attributes:
+        zeta: Commanded ``[vehicle body rates; joint rates]`` (nv,) [m/s, rad/s].
+        status: Solver status (:class:`~uvms_qp.hqp.Status`).
+        hierarchy: The measured :class:`~uvms_qp.hqp.HierarchyResult` of ``zeta`` (per-level
+            residuals, slacks, active bounds, solve time), or None for a scheme that solves no
+            hierarchy (the papers' closed forms).
+        t: Time of the tick [s].
+        step_time: Wall time of the whole step (rows, bounds, solve, measurement) [s].
+        scheme: Name of the scheme (``"hqp"``, ``"weighted"``, ``"nullspace"``, a paper's).
+        solver: Back-end name (``"closed-form"`` for the papers' schemes).
+        lower: Hard lower bounds on zeta used this tick (nv,).
+        upper: Hard upper bounds on zeta used this tick (nv,).
+        saturated: zeta was clipped into the box by more than round-off (a closed form's
+            saturation; see ``clipped``).
+        level_names: Task names of each level.
+        stage: Stage of the fallback ladder that produced zeta (:mod:`uvms_qp.safety`):
+            ``primary`` on the happy path; ``cold_retry``, ``alternate``, ``relaxed`` (verified
+            solves), ``decayed_previous``, ``zero``, ``hold_zero`` (degraded commands).
+        clipped: Amount the box clip removed from the solver's zeta [m/s, rad/s].
+        deadline_missed: The step took longer than the controller's ``deadline``.
+        attempts: Why each earlier stage was rejected (empty on the happy path).
+        task_residuals: Task name -> (norm of its row violation at zeta, unit of its rows).
+        task_errors: Task name -> (norm of its error or objective value this tick, unit).
+    """
+
+    __slots__ = ("attempts", "clipped", "deadline_missed", "hierarchy", "level_names", "lower",
+                 "saturated", "scheme", "solver", "stage", "status", "step_time", "t",
+                 "task_errors", "task_residuals", "upper", "zeta")
+
+    def __init__(self, zeta: FloatArray, status: Status, hierarchy: HierarchyResult | None,
+                 t: float, step_time: float, scheme: str, solver: str, lower: FloatArray,
+                 upper: FloatArray, saturated: bool = False,
+                 level_names: tuple[tuple[str, ...], ...] = (), stage: str = "primary",
+                 clipped: float = 0.0, deadline_missed: bool = False,
+                 attempts: tuple[str, ...] = (), task_residuals: Report | None = None,
+                 task_errors: Report | None = None) -> None:
+        self.zeta, self.status, self.hierarchy = zeta, status, hierarchy
+        self.t, self.step_time, self.scheme, self.solver = t, step_time, scheme, solver
+        self.lower, self.upper, self.saturated = lower, upper, saturated
+        self.level_names, self.stage, self.clipped = level_names, stage, clipped
+        self.deadline_missed, self.attempts = deadline_missed, attempts
+        self.task_residuals: Report = {} if task_residuals is None else task_residuals
+        self.task_errors: Report = {} if task_errors is None else task_errors
+
+    @property
+    def ok(self) -> bool:
+        """True when zeta is the scheme's optimum (``optimal`` or ``level_infeasible``)."""
+        return self.status in OK_STATUSES
+
+    @property
+    def degraded(self) -> bool:
+        """True when zeta did not come from the primary back-end (see ``stage``)."""
+        return self.stage != "primary"
+
+    @property
+    def level_violations(self) -> list[float]:
+        """Per level: unweighted norm of the row violation at zeta (scheme-independent)."""
+        res = self.task_residuals
+        return [math.sqrt(sum(res[name][0] ** 2 for name in names))
+                for names in self.level_names]
+
+    @property
+    def bound_violation(self) -> float:
+        """Largest violation of the hard box and hard rows at zeta (0 when they hold)."""
+        if self.hierarchy is not None:
+            return self.hierarchy.hard_violation
+        return hard_violation(self.zeta, self.lower, self.upper)
+
+    def summary(self) -> str:
+        """A readable report: status, time, per-level and per-task residuals with units."""
+        lines = [f"t = {self.t:.3f} s  {self.scheme}/{self.solver}: {self.status.value}  "
+                 f"step {self.step_time * 1e6:.0f} us"
+                 + ("  (saturated into the box)" if self.saturated else "")
+                 + (f"  [fallback: {self.stage}]" if self.stage != "primary" else "")]
+        res = self.task_residuals
+        err = self.task_errors
+        for k, (names, violation) in enumerate(zip(self.level_names, self.level_violations,
+                                                   strict=True)):
+            lines.append(f"  level {k}: violation {violation:.3e}")
+            for name in names:
+                r, ru = res[name]
+                e, eu = err.get(name, (math.nan, ""))
+                lines.append(f"    {name:<22} residual {r:.3e} [{ru}]   error {e:.3e} [{eu}]")
+        lines.append(f"  zeta = {np.array2string(self.zeta, precision=4, suppress_small=True)}")
+        lines.append(f"  hard bound violation {self.bound_violation:.1e}")
+        message = self.hierarchy.message if self.hierarchy is not None else ""
+        if message:
+            lines.append(f"  {message}")
+        lines.extend(f"  rejected: {a}" for a in self.attempts)
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return (f"StepResult(t={self.t:g}, {self.scheme}/{self.solver}: {self.status.value}, "
+                f"stage={self.stage})")

@@ -1,0 +1,200 @@
+"""The entry points: a reusable :class:`HierarchySolver` and the one-shot :func:`solve_hierarchy`.
+
+One path for every call: :class:`~uvms_qp.hqp.validate.Validator` (user input only) ->
+back-end (:mod:`uvms_qp.hqp.backends`) -> :func:`~uvms_qp.hqp.measure.evaluate`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from time import perf_counter as _clock
+from typing import Any
+
+import numpy as np
+
+from .._validation import FloatArray, as_scalar, as_vector
+from ..errors import InputError
+from .backends import Backend
+from .backends.cascade import CascadeBackend
+from .backends.daqp import DaqpBackend
+from .backends.nullspace import NullspaceBackend
+from .measure import Certifier, clip_to_box, evaluate
+from .problem import Problem
+from .registry import SolverSpec, available_solvers, get_spec
+from .result import OK_STATUSES, HierarchyResult
+from .validate import Validator
+
+
+def make_backend(spec: SolverSpec, options: dict[str, Any]) -> Backend:
+    """The back-end of a registry entry, configured with ``options`` (checked by it)."""
+    if spec.kind == "daqp":
+        return DaqpBackend(spec, options)
+    if spec.kind == "cascade":
+        return CascadeBackend(spec, options)
+    return NullspaceBackend(spec, **options)
+
+
+class HierarchySolver:
+    """A reusable lexicographic solver: keeps the problem buffers and the back-end's warm start.
+
+    Args:
+        solver: One of :func:`available_solvers` (``"daqp"``, ``"nullspace"``,
+            ``"cascade:<qpsolvers name>"``).
+        weights: Diagonal of the metric W of the final regularisation ``min x' W x``, shape (n,),
+            positive; None for the identity (e.g. ``[10, 10, 10, 1, 1, 1]`` moves the arm rather
+            than the vehicle, ``000_7b5f597fe4e36aa4.txt, Eq. (17)``).
+        options: Back-end options. Common keys: ``level_tol`` (relative tolerance deciding that a
+            level is met, default from the registry), ``hard_tol``; DAQP settings (``rho_soft``,
+            ``primal_tol``, ``time_limit``...) and ``rho_ladder``; cascade ``rank_tol``, ``reg``
+            and qpsolvers settings; nullspace ``rcond`` and ``atol``.
+
+    Attributes:
+        backend: The back-end object (:class:`~uvms_qp.hqp.backends.Backend`).
+        certify: Optimality certificate asked about every answer with an unmet level
+            (:data:`~uvms_qp.hqp.measure.Certifier`); None: unmet levels are not questioned.
+        saturate: Clip every claimed answer into the box before measuring it, the amount in
+            ``info["clipped"]`` (for a closed form that cannot enforce the box, whose command is
+            its saturated answer); False by default.
+
+    Raises:
+        UnknownSolverError: unknown or uninstalled solver (lists installed ones, says what to
+            install).
+        InputError: options that are not a dict of known keys, or a bad value.
+    """
+
+    def __init__(self, solver: str = "daqp", weights: Any = None,
+                 options: dict[str, Any] | None = None) -> None:
+        self.spec = get_spec(solver)
+        if options is None:
+            options = {}
+        if not isinstance(options, dict) or not all(isinstance(k, str) for k in options):
+            raise InputError(f"options: expected a dict with string keys, got {options!r}")
+        opts = dict(options)
+        self.level_tol = as_scalar(opts.pop("level_tol", self.spec.level_tol),
+                                   "options['level_tol']", positive=True)
+        self.hard_tol = as_scalar(opts.pop("hard_tol", self.spec.hard_tol),
+                                  "options['hard_tol']", positive=True)
+        self.backend: Backend = make_backend(self.spec, opts)
+        self._name = self.spec.name
+        self.certify: Certifier | None = None
+        self.saturate = False
+        self.weights = weights
+        self._validate = Validator()
+
+    @property
+    def name(self) -> str:
+        """Name of the solver."""
+        return self.spec.name
+
+    @property
+    def weights(self) -> Any:
+        """Diagonal of the metric W as given (None for the identity)."""
+        return self._weights
+
+    @weights.setter
+    def weights(self, value: Any) -> None:
+        if value is getattr(self, "_weights", ...) and value is None:
+            return
+        self._weights = value
+        self._metric: FloatArray | None = None
+        self._metric_src = b""
+
+    def _metric_for(self, n: int) -> FloatArray | None:
+        """The validated metric for n variables (None for the identity).
+
+        Validated once and reused while the given weights keep their values (an array changed
+        in place is noticed through its bytes and validated again).
+        """
+        raw = self._weights
+        if raw is None:
+            return None
+        try:
+            src = np.asarray(raw, dtype=np.float64).tobytes()
+        except (TypeError, ValueError):
+            src = b"?"
+        W = self._metric
+        if W is None or W.shape[0] != n or src != self._metric_src:
+            W = as_vector(raw, "weights", n, positive=True).copy()  # never the caller's array
+            self._metric, self._metric_src = W, src
+        return W
+
+    def reset(self) -> None:
+        """Forget the back-end's warm start: the next solve starts cold."""
+        self.backend.reset()
+
+    def solve(self, levels: Sequence[Any], lower: Any = None, upper: Any = None,
+              hard: Sequence[Any] | None = None) -> HierarchyResult:
+        """Validate and solve one lexicographic problem.
+
+        Args:
+            levels: Levels, highest priority first; each a list of ``Rows``, ``(A, b)`` pairs or
+                ``(A, lo, hi)`` triples over x (shape (m, n)).
+            lower: Hard lower bounds on x (length n, ``-inf`` allowed), e.g. [m/s], [rad/s].
+            upper: Hard upper bounds on x (length n, ``+inf`` allowed).
+            hard: Hard general rows (never relaxed), same forms as a level.
+
+        Returns:
+            The result (never None; ``x`` always finite; see :class:`~uvms_qp.hqp.Status`).
+
+        Raises:
+            InputError: malformed input (shape, NaN/inf, lower > upper, inequality level given to
+                ``"nullspace"``), with a message naming the culprit.
+        """
+        problem = self._validate(levels, lower, upper, hard)
+        if self._weights is not None:
+            problem.W = self._metric_for(problem.n)  # type: ignore[assignment]
+        return self.solve_problem(problem)
+
+    def solve_problem(self, problem: Problem) -> HierarchyResult:
+        """Solve a :class:`~uvms_qp.hqp.problem.Problem` (trusted: no validation).
+
+        The problem's own metric ``problem.W`` is used; ``x`` is measured like any answer.
+        """
+        start = _clock()
+        answer = self.backend.solve(problem)
+        x, message, info = answer.x, answer.message, answer.info
+        if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
+            x, message, info = _saturated(problem, x, message, info)
+        return evaluate(problem, x, answer.status, self._name, message, info, self.level_tol,
+                        self.hard_tol, _clock() - start, answer.measured, self.certify)
+
+
+def _saturated(problem: Problem, x: Any, message: str, info: dict[str, object]
+               ) -> tuple[Any, str, dict[str, object]]:
+    """A finite answer of the right length clipped into the box (anything else unchanged)."""
+    if not (isinstance(x, np.ndarray) and x.shape == (problem.n,) and np.isfinite(x).all()):
+        return x, message, info
+    clipped, amount = clip_to_box(x, problem.lower, problem.upper)
+    if not amount:
+        return x, message, info
+    return clipped, message or "saturated into the hard box", {**info, "clipped": amount}
+
+
+def solve_hierarchy(
+    levels: Sequence[Any],
+    lower: Any = None,
+    upper: Any = None,
+    solver: str = "daqp",
+    weights: Any = None,
+    *,
+    hard: Sequence[Any] | None = None,
+    options: dict[str, Any] | None = None,
+) -> HierarchyResult:
+    """Solve a lexicographic problem once (see :class:`HierarchySolver` for the arguments).
+
+    Repeated calls with the same ``solver`` and no ``options`` reuse one cached
+    :class:`HierarchySolver` (its buffers and warm start), so a loop of calls stays cheap.
+    """
+    if not isinstance(solver, str):
+        raise InputError(f"solver: expected a solver name (one of {available_solvers()}), "
+                         f"got {type(solver).__name__}")
+    if options is None:
+        cached = _CACHE.get(solver)
+        if cached is None:
+            cached = _CACHE[solver] = HierarchySolver(solver)
+        cached.weights = weights
+        return cached.solve(levels, lower, upper, hard)
+    return HierarchySolver(solver, weights, options).solve(levels, lower, upper, hard)
+
+
+_CACHE: dict[str, HierarchySolver] = {}

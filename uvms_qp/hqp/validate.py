@@ -1,0 +1,308 @@
+"""The one validator: user-facing levels into the stacked :class:`~uvms_qp.hqp.problem.Problem`.
+
+A level is a list of ``Rows`` objects, ``(A, b)`` equality pairs or ``(A, lo, hi)`` inequality
+triples over x (A of shape (m, n)); hard rows take the same forms; the box is two vectors of
+length n (``-inf`` / ``+inf`` allowed). :class:`Validator` copies every row and side into the
+buffers of a problem (reused while the structure ``(n, m_H, level sizes)`` repeats) and checks
+the whole stack with a few reductions (:func:`sides_and_rows_ok`):
+
+* no NaN side, no lower side ``+inf`` and no upper side ``-inf`` (e.g. an infinite equality
+  target), no lower side above its upper side;
+* no NaN or inf in a matrix;
+* the row weights are finite and positive.
+
+When the input is not in this common form or a check fails, the items are validated one by one,
+which raises the error naming the culprit (``levels[1][0].A: expected 2 columns, got 3``); an
+overflowing reduction on legitimate values (entries near 1e154) passes that second look and the
+problem is solved as filled.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .._validation import FloatArray, as_array, as_vector, check_bounds_order
+from ..errors import InputError, ShapeError
+from ..rows import Rows
+from .problem import Problem
+
+_Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]
+_Parsed = tuple[list[FloatArray], list[FloatArray], list[FloatArray], list[FloatArray | None],
+                int, list[int]]
+"""Rows, lower sides, upper sides and weights of every item (hard items first), the number of
+hard items and the level sizes."""
+_MIN = np.minimum.reduce
+_F64 = np.dtype(np.float64)
+
+
+def _float(value: Any) -> FloatArray:
+    """``value`` as a float64 array of real numbers (no copy when it is one already).
+
+    Raises:
+        InputError: not real numbers (strings, booleans, complex numbers are not converted).
+    """
+    if type(value) is np.ndarray and value.dtype is _F64:
+        return value
+    return as_array(value, "value")
+
+
+def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None:
+    """The items in the common form, their column count, hard rows and whether any is weighted.
+
+    The column count is -1 when the items disagree. None when the input is not in the common
+    form (then :func:`_one_by_one` decides).
+    """
+    if type(levels) is not list and type(levels) is not tuple:
+        return None
+    As: list[FloatArray] = []
+    los: list[FloatArray] = []
+    his: list[FloatArray] = []
+    ws: list[FloatArray | None] = []
+    sizes: list[int] = []
+    n_hard = mh = 0
+    cols = 0
+    weighted = False
+    groups = levels if hard is None else [hard, *levels]
+    for g, group in enumerate(groups):
+        if type(group) is not list and type(group) is not tuple:
+            return None
+        m = 0
+        for item in group:
+            kind = type(item)
+            try:
+                if kind is tuple or kind is list:
+                    if len(item) == 2:
+                        A, lo = item
+                        lo = hi = _float(lo)
+                    elif len(item) == 3:
+                        A, lo, hi = item
+                        lo, hi = _float(lo), _float(hi)
+                    else:
+                        return None
+                    w = None
+                elif isinstance(item, Rows):
+                    lo, hi = _float(item.lower), _float(item.upper)
+                    A, w = item.A, item.weights
+                    if w is not None:
+                        w = _float(w)
+                        if w.shape != lo.shape:
+                            return None
+                        weighted = True
+                else:
+                    return None
+                A = _float(A)
+            except (TypeError, ValueError):
+                return None
+            shape = A.shape
+            if len(shape) != 2:
+                return None
+            rows, width = shape
+            if lo.shape != (rows,) or hi.shape != (rows,):
+                return None
+            if width != cols:
+                cols = width if not As else -1
+            As.append(A)
+            los.append(lo)
+            his.append(hi)
+            ws.append(w)
+            m += rows
+        if hard is not None and g == 0:
+            n_hard, mh = len(As), m
+        else:
+            sizes.append(m)
+    return (As, los, his, ws, n_hard, sizes), cols, mh, weighted
+
+
+# -------------------------------------------------------------------------- one by one
+def _as_rows(item: Any, label: str) -> Rows:
+    """One item (Rows, (A, b) or (A, lo, hi)) validated; raises the error naming ``label``."""
+    if isinstance(item, Rows):
+        name = f"{label} ({item.name})" if item.name else label
+        return Rows.validated(item.A, item.lower, item.upper, item.weights, name)
+    if isinstance(item, tuple | list) and len(item) == 2:
+        return Rows.equality(item[0], item[1], name=label)
+    if isinstance(item, tuple | list) and len(item) == 3:
+        return Rows.inequality(item[0], item[1], item[2], name=label)
+    raise InputError(
+        f"{label}: expected Rows, an (A, b) pair or an (A, lo, hi) triple, "
+        f"got {type(item).__name__}"
+    )
+
+
+def _level_rows(items: Any, n: int | None, label: str) -> tuple[list[Rows], int | None]:
+    """Validated rows of one level (or of the hard rows) and the column count."""
+    if isinstance(items, Rows) or (isinstance(items, tuple) and items and not isinstance(
+            items[0], Rows | tuple | list)):
+        items = [items]  # a single Rows or a bare (A, b) tuple given as a level
+    if not isinstance(items, Sequence) or isinstance(items, str | bytes):
+        raise InputError(f"{label}: expected a list of rows, got {type(items).__name__}")
+    rows = [_as_rows(item, f"{label}[{i}]") for i, item in enumerate(items)]
+    for i, r in enumerate(rows):
+        if n is None:
+            n = r.n
+        elif r.n != n:
+            raise ShapeError(f"{label}[{i}].A: expected {n} columns, got {r.n}")
+    return rows, n
+
+
+def _one_by_one(levels: Any, lower: Any, upper: Any, hard: Any, n: int | None
+                ) -> tuple[_Parsed, FloatArray, FloatArray]:
+    """Validate every item with errors naming the culprit; the parsed items and the box."""
+    if isinstance(levels, Rows) or not isinstance(levels, Sequence) or isinstance(
+            levels, str | bytes):
+        raise InputError(f"levels: expected a list of levels, got {type(levels).__name__}")
+    per_level = []
+    for k, level in enumerate(levels):
+        rows, n = _level_rows(level, n, f"levels[{k}]")
+        per_level.append(rows)
+    hard_rows, n = _level_rows(list(hard) if hard is not None else [], n, "hard")
+    if n == 0:
+        raise ShapeError("levels: the rows have 0 columns (at least one variable is needed)")
+    if n is None:
+        for vec in (lower, upper):
+            if vec is not None:
+                n = int(np.size(vec))
+                break
+    if n is None or n < 1:
+        raise InputError("levels: cannot infer the number of variables (no rows and no bounds)")
+    lo = np.full(n, -np.inf) if lower is None else as_vector(lower, "lower", n, allow_inf=True)
+    hi = np.full(n, np.inf) if upper is None else as_vector(upper, "upper", n, allow_inf=True)
+    check_bounds_order(lo, hi, "bounds")
+    if np.any(lo == np.inf) or np.any(hi == -np.inf):
+        raise InputError("bounds: a lower bound is +inf or an upper bound is -inf")
+    every = [*hard_rows, *[r for rows in per_level for r in rows]]
+    parsed = ([r.A for r in every], [r.lower for r in every], [r.upper for r in every],
+              [r.weights for r in every], len(hard_rows), [sum(r.m for r in rows)
+                                                           for rows in per_level])
+    return parsed, lo, hi
+
+
+class Validator:
+    """Validates user levels into a :class:`Problem`, reusing the one of the last structure.
+
+    A problem handed out is overwritten by the next call of the same structure: keep
+    :meth:`Problem.copy` of it to hold on to its values.
+    """
+
+    def __init__(self) -> None:
+        self._problem: Problem | None = None
+        self._ones = False  # the kept problem's row weights are all ones
+        self._flat = np.zeros(0)  # the kept problem's sides as one (2 M,) view
+        self._constant: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
+        self._last = (np.zeros(0), np.zeros(0), np.zeros(0))
+
+    def _constants(self, n: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(-inf, +inf, ones)`` vectors of length n (shared, never written)."""
+        got = self._last
+        if got[2].shape[0] != n:
+            kept = self._constant.get(n)
+            if kept is None:
+                kept = self._constant[n] = (np.full(n, -np.inf), np.full(n, np.inf), np.ones(n))
+            self._last = got = kept
+        return got
+
+    @staticmethod
+    def _box(value: Any, n: int, default: FloatArray) -> FloatArray | None:
+        if value is None:
+            return default
+        try:
+            side = _float(value)
+        except (TypeError, ValueError):
+            return None
+        return side if side.shape == (n,) else None
+
+    def __call__(self, levels: Any, lower: Any = None, upper: Any = None, hard: Any = None,
+                 W: FloatArray | None = None, n: int | None = None) -> Problem:
+        """Validate and load; returns the problem (``W``: the validated metric, None for ones).
+
+        Raises:
+            InputError: malformed levels or items.
+            ShapeError: inconsistent column counts or vector lengths.
+            NonFiniteError: NaN anywhere, or inf in a matrix / equality target.
+            BoundsError: a lower side above its upper side.
+        """
+        given = n
+        fast = _fast_parse(levels, hard)
+        lo_box: FloatArray | None = None
+        hi_box: FloatArray | None = None
+        if fast is not None and fast[1] > 0:
+            parsed, cols, mh, weighted = fast
+            lo_inf, hi_inf, _ = self._constants(cols)
+            lo_box, hi_box = self._box(lower, cols, lo_inf), self._box(upper, cols, hi_inf)
+        checked = lo_box is None or hi_box is None
+        if lo_box is None or hi_box is None:
+            parsed, lo_box, hi_box = _one_by_one(levels, lower, upper, hard, given)
+            mh = sum(A.shape[0] for A in parsed[0][:parsed[4]])
+            weighted = any(w is not None for w in parsed[3])
+        width = int(lo_box.shape[0])
+        As, los, his, ws, n_hard, sizes = parsed
+        problem = self._problem
+        if problem is None or problem.n != width or problem.mh != mh or (
+                problem.sizes != tuple(sizes)):
+            problem = self._problem = Problem(width, mh, sizes)
+            self._flat = problem.sides.reshape(-1)
+            self._ones = True
+        if As:
+            np.concatenate(As, out=problem.A[width:])
+        np.concatenate((lo_box, *los, hi_box, *his), out=self._flat)
+        if not checked and not sides_and_rows_ok(problem):
+            _one_by_one(levels, lower, upper, hard, width)  # raises, or the sums overflowed
+        if weighted:
+            w = np.concatenate([w if w is not None else np.ones(A.shape[0])
+                                for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
+            if not (math.isfinite(float(w.sum())) and _MIN(w) > 0.0):
+                _one_by_one(levels, lower, upper, hard, width)  # names the rows at fault
+            problem.set_weights(w)
+            self._ones = False
+        elif not self._ones:
+            problem.set_weights(None)
+            self._ones = True
+        problem.W = self._constants(width)[2] if W is None else W
+        return problem
+
+
+def finite_ok(problem: Problem) -> bool:
+    """No NaN or inf in the rows, no NaN side, no lower side ``+inf``, no upper side ``-inf``.
+
+    Two warning-free reductions: ``sum(lo) - sum(hi)`` is finite or ``-inf`` exactly when the
+    sides are legitimate (``+inf`` and ``-inf`` together give NaN), ``vdot(A, A)`` is finite
+    exactly when every row entry is; a finite overflow (entries beyond ~1e154) gives a false
+    alarm only, for the caller's detailed check to clear.
+    """
+    v = float(np.vdot(problem.sides, problem.signs))
+    if not (v == -math.inf or math.isfinite(v)):
+        return False
+    rows = problem.A[problem.n:]
+    return not rows.size or math.isfinite(float(np.vdot(rows, rows)))
+
+
+def sides_and_rows_ok(problem: Problem) -> bool:
+    """:func:`finite_ok`, and no lower side above its upper side."""
+    return finite_ok(problem) and not np.count_nonzero(
+        np.greater(problem.lo, problem.hi, out=problem.flags))
+
+
+def normalize_problem(levels: Any, lower: Any = None, upper: Any = None, weights: Any = None,
+                      hard: Any = None, n: int | None = None) -> Problem:
+    """Validate a user problem into a fresh :class:`Problem` (see :class:`Validator`).
+
+    Args:
+        levels: Levels, highest priority first; a level is a list of ``Rows``, ``(A, b)`` pairs
+            or ``(A, lo, hi)`` triples.
+        lower: Hard lower bounds on x (length n, ``-inf`` allowed) or None.
+        upper: Hard upper bounds on x (length n, ``+inf`` allowed) or None.
+        weights: Diagonal of the metric W (length n, positive) or None for the identity.
+        hard: Hard general rows (same forms as a level) or None.
+        n: Number of variables when it cannot be read from the rows (e.g. no levels).
+
+    Raises:
+        InputError, ShapeError, NonFiniteError, BoundsError: see :meth:`Validator.__call__`.
+    """
+    problem = Validator()(levels, lower, upper, hard, None, n)
+    if weights is not None:
+        problem.W = as_vector(weights, "weights", problem.n, positive=True)
+    return problem
