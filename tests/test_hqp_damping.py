@@ -41,21 +41,60 @@ def test_no_rows_away_from_singularities():
     assert min(damping.sigma_min) > EPS
 
 
-@pytest.mark.parametrize("sigma", [0.05, 1e-3, 1e-7])
-def test_the_weak_direction_gets_sigma_b_over_epsilon_squared(sigma):
+@pytest.mark.parametrize("angle", [0.05, 1e-3, 1e-7])
+def test_the_weak_direction_gets_sigma_b_over_epsilon_squared(angle):
+    """Two unit rows at ``angle``: singular values ``sqrt(2) cos(angle/2)`` and
+    ``sqrt(2) sin(angle/2)``; along the weak one the damped answer is ``sigma b / eps^2``."""
     rng = np.random.default_rng(1)
-    U, V = _orthonormal(rng, 2), _orthonormal(rng, 4)
-    A = U @ np.diag([2.0, sigma]) @ V[:, :2].T
-    b = U @ np.array([0.4, 0.3])
+    V = _orthonormal(rng, 4)
+    A = np.vstack([V[:, 0], np.cos(angle) * V[:, 0] + np.sin(angle) * V[:, 1]])
+    b = np.array([0.4, 0.1])
+    U, S, Vt = np.linalg.svd(A)
+    sigma, u, v = S[1], U[:, 1], Vt[1]
+    assert sigma == pytest.approx(np.sqrt(2.0) * np.sin(angle / 2.0), rel=1e-6)
     blocks = [(A, b, b)]
     undamped = solve_hierarchy([[blocks[0]]]).x
-    if sigma > 1e-4:  # (below, DAQP's own soft-row regularisation already caps the answer)
-        assert abs(V[:, 1] @ undamped) == pytest.approx(0.3 / sigma, rel=1e-5)
+    if angle > 1e-4:  # (below, DAQP's own soft-row regularisation already caps the answer)
+        assert v @ undamped == pytest.approx(u @ b / sigma, rel=1e-5)
     damping = level_damping(_levels(blocks), undamped, np.ones(4), [EPS])
     assert damping.damped_levels == (0,) and damping.sigma_min[0] == pytest.approx(sigma)
     x = solve_hierarchy(_with_rows(blocks, damping)).x
-    assert V[:, 1] @ x == pytest.approx(sigma * 0.3 / EPS**2, rel=1e-6, abs=1e-8)
-    assert V[:, 0] @ x == pytest.approx(0.4 / 2.0, rel=1e-7)  # the strong direction: exact
+    assert v @ x == pytest.approx(sigma * (u @ b) / EPS**2, rel=1e-6, abs=1e-8)
+    assert Vt[0] @ x == pytest.approx(U[:, 0] @ b / S[0], rel=1e-7)  # the strong one: exact
+
+
+def test_the_scale_and_units_of_the_rows_do_not_matter():
+    """Rows are compared at unit norm: the units of a level (a common scale of its rows and
+    targets) leave the damped answer alone (solved in closed form, itself blind to them)."""
+    rng = np.random.default_rng(7)
+    A = rng.normal(size=(2, 5))
+    A[1] = A[0] + 1e-3 * rng.normal(size=5)
+    b = np.array([0.3, -0.2])
+    answers = []
+    for scale in (np.array([1.0, 1.0]), np.array([1e-6, 1e-6]), np.array([1e4, 1e4])):
+        blocks = [(scale[:, None] * A, scale * b, scale * b)]
+        undamped = solve_hierarchy([[blocks[0]]], solver="nullspace").x
+        damping = level_damping(_levels(blocks), undamped, np.ones(5), [EPS])
+        assert damping.acted
+        answers.append(solve_hierarchy(_with_rows(blocks, damping), solver="nullspace").x)
+    assert np.allclose(answers[1], answers[0], rtol=1e-7, atol=1e-10)
+    assert np.allclose(answers[2], answers[0], rtol=1e-7, atol=1e-10)
+
+
+def test_a_large_demand_over_a_long_period_raises_the_threshold():
+    """``epsilon_i = max(epsilon, sqrt(dt |b_i|))``: the damped closed loop settles without
+    overshoot only when ``epsilon_i^2 >= dt g |b_i|``."""
+    rng = np.random.default_rng(8)
+    V = _orthonormal(rng, 3)
+    angle = 0.2  # sigma = sqrt(2) sin(0.1) = 0.141: above EPS, below sqrt(dt |b|) for a big b
+    A = np.vstack([V[:, 0], np.cos(angle) * V[:, 0] + np.sin(angle) * V[:, 1]])
+    for b, dt, damped in ((np.array([0.0, 0.02]), 0.05, False),
+                          (np.array([0.0, 2.0]), 0.05, True),
+                          (np.array([0.0, 2.0]), 0.0, False)):
+        blocks = [(A, b, b)]
+        undamped = solve_hierarchy([[blocks[0]]]).x
+        damping = level_damping(_levels(blocks), undamped, np.ones(3), [EPS], dt=dt)
+        assert damping.acted is damped, (b, dt)
 
 
 def test_damping_leaves_the_lower_levels_all_the_freedom_the_rows_leave():
