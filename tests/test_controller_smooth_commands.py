@@ -20,8 +20,8 @@ from uvms_qp.constraints import (
     JointVelocityBounds,
     VehicleRateBounds,
 )
+from uvms_qp.controller.history import command_reversals
 from uvms_qp.model import DHRow, Vehicle
-from uvms_qp.sim.metrics import command_reversals
 from uvms_qp.tasks import EndEffectorTask, ManipulabilityTask, StationKeepingTask
 
 DT = 0.05
@@ -134,6 +134,11 @@ def test_an_arm_at_its_singularity_does_not_bang_between_its_bounds(make, should
     late = commands[round(1.0 / DT):]
     per_second = command_reversals(late, rates) / (late.shape[0] * DT)
     assert per_second.max() <= 0.5
-    assert np.abs(np.diff(late, axis=0)).max() / DT < 0.1 * 2 * rates.max() / DT
+    # the largest change per step [rad/s^2]: never a jump across the box (the bang-bang figure
+    # 2 bound / dt), and once the arm has stretched (last 5 s) a small fraction of it
+    bang = 2 * rates / DT
+    change = np.abs(np.diff(late, axis=0)) / DT
+    assert np.all(change.max(axis=0) < 0.25 * bang)
+    assert np.all(change[-100:].max(axis=0) < 0.01 * bang)
     state = model.state(q)  # the arm ends stretched toward the goal, as close as it can be
     assert np.linalg.norm(state.position("tool") - goal) == pytest.approx(0.02 * reach, rel=0.02)

@@ -11,13 +11,9 @@ import numpy as np
 import pytest
 from scenario_text import bluerov_scenario
 
+from uvms_qp.controller.history import command_reversals
 from uvms_qp.sim.comparison import Comparison, SchemeRun
-from uvms_qp.sim.metrics import (
-    axis_bounds,
-    command_change_max,
-    command_reversals,
-    settling_time,
-)
+from uvms_qp.sim.metrics import axis_bounds, command_change_max, settling_time
 from uvms_qp.sim.plots import run_figures
 from uvms_qp.sim.results import write_results
 from uvms_qp.sim.runner import simulate

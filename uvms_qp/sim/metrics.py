@@ -20,10 +20,11 @@ commands for ``k = 0..N-1``), independently of the controller's own diagnostics:
 - ``command_reversals_per_s`` (by entry of zeta), ``command_reversals_per_s_max`` and
   ``command_reversals_worst_axis`` [1/s]: how often each entry of the command reverses, counted
   after the start-up transient (the first :data:`TRANSIENT` seconds) and divided by the time
-  counted. A reversal is a change of sign from one command to the next with both commands
-  above :data:`REVERSAL_THRESHOLD` of the entry's bound (:func:`axis_bounds`): noise around zero
-  is not a reversal, nor is a smooth change of direction (it passes through the small values),
-  while a command that bangs between its bounds reverses every step (1 / dt per second);
+  counted. A reversal (:func:`uvms_qp.controller.history.command_reversals`) is a change of sign
+  from one command to the next with both commands above ``REVERSAL_THRESHOLD`` (1 %) of the
+  entry's bound (:func:`axis_bounds`): noise around zero is not a reversal, nor is a smooth
+  change of direction (it passes through the small values), while a command that bangs between
+  its bounds reverses every step (1 / dt per second);
 - ``command_change_max`` [m/s^2, rad/s^2] (by unit): the largest ``|zeta_k - zeta_{k-1}| / dt``
   of the entries of each unit, from rest (``zeta_{-1} = 0``): what the vehicle's thrusters and
   the arm's actuators would have to deliver;
@@ -43,14 +44,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import FloatArray
+from ..controller.history import command_reversals
 from .current import wrap_angle
 
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
 
-#: Fraction of an entry's bound a command must exceed, on both sides of a sign change, for the
-#: change to count as a reversal.
-REVERSAL_THRESHOLD = 0.01
 #: Start-up transient [s] left out of the reversal counts.
 TRANSIENT = 1.0
 #: Settling band: fraction of the largest error norm of the run.
@@ -98,25 +97,6 @@ def axis_bounds(zeta: FloatArray, lower: FloatArray, upper: FloatArray) -> Float
         bounds[bounded] = np.nanmedian(widest[:, bounded], axis=0)
     peak = np.abs(np.where(np.isfinite(zeta), zeta, 0.0)).max(axis=0)
     return np.asarray(np.where(np.isfinite(bounds), bounds, peak), dtype=np.float64)
-
-
-def command_reversals(zeta: FloatArray, bounds: FloatArray,
-                      threshold: float = REVERSAL_THRESHOLD) -> NDArray[np.int64]:
-    """Number of reversals of each entry of the command (nv,).
-
-    A reversal: two consecutive commands of opposite signs, both above ``threshold * bounds``
-    in magnitude.
-
-    Args:
-        zeta: Commands (N, nv).
-        bounds: Bound of each entry (nv,) (:func:`axis_bounds`).
-        threshold: Fraction of the bound a command must exceed on both sides.
-    """
-    if zeta.shape[0] < 2:
-        return np.zeros(zeta.shape[1], dtype=np.int64)
-    large = np.abs(zeta) > threshold * bounds
-    flips = (np.sign(zeta[1:]) * np.sign(zeta[:-1]) < 0) & large[1:] & large[:-1]
-    return np.asarray(flips.sum(axis=0), dtype=np.int64)
 
 
 def reversal_metrics(result: SimulationResult, steps: NDArray[np.bool_]) -> dict[str, Any]:
