@@ -187,11 +187,11 @@ class _StackScheme:
                 1.0, problem.hard_scale):
             return None
         x, clipped = clip_to_box(result.x, problem.lower, problem.upper)
+        clipped = max(clipped, float(result.info.get("clipped", 0.0)))  # type: ignore[arg-type]
+        flagged = clipped > self.safe.clip_flag_tol
         if main is None:
-            return SafeSolve(x, result, PRIMARY, (), clipped,
-                             clipped > self.safe.clip_flag_tol)
-        return SafeSolve(x, result, main.stage, main.attempts, max(main.clipped, clipped),
-                         main.clip_flagged or clipped > self.safe.clip_flag_tol,
+            return SafeSolve(x, result, PRIMARY, (), clipped, flagged)
+        return SafeSolve(x, result, main.stage, main.attempts, clipped, flagged,
                          main.deadline_missed, main.relaxed_levels, main.elapsed)
 
     def _blend(self, excluded: tuple[int, ...], ramping: tuple[int, ...], main: SafeSolve,
