@@ -7,13 +7,16 @@ import numpy as np
 import pytest
 
 from uvms_qp import solve_hierarchy
+from uvms_qp.hqp import normalize_problem
 from uvms_qp.hqp.damping import level_damping
 
 EPS = 0.1
 
 
-def _levels(blocks):
-    return [(A, lo, hi, np.ones(A.shape[0])) for A, lo, hi in blocks]
+def _damping(blocks, x, thresholds, metric=None, hard=None, dt=0.0):
+    problem = normalize_problem([[b] for b in blocks], weights=metric,
+                                hard=None if hard is None else [hard])
+    return level_damping(problem, x, thresholds, dt)
 
 
 def _with_rows(blocks, damping):
@@ -36,7 +39,7 @@ def test_no_rows_away_from_singularities():
     blocks = [(rng.normal(size=(3, 7)), np.zeros(3), np.zeros(3)),
               (rng.normal(size=(2, 7)), -np.ones(2), np.ones(2))]
     x = solve_hierarchy([[b] for b in blocks]).x
-    damping = level_damping(_levels(blocks), x, np.ones(7), [EPS, EPS])
+    damping = _damping(blocks, x, [EPS, EPS])
     assert not damping.acted and damping.damped_levels == ()
     assert min(damping.sigma_min) > EPS
 
@@ -56,7 +59,7 @@ def test_the_weak_direction_gets_sigma_b_over_epsilon_squared(angle):
     undamped = solve_hierarchy([[blocks[0]]]).x
     if angle > 1e-4:  # (below, DAQP's own soft-row regularisation already caps the answer)
         assert v @ undamped == pytest.approx(u @ b / sigma, rel=1e-5)
-    damping = level_damping(_levels(blocks), undamped, np.ones(4), [EPS])
+    damping = _damping(blocks, undamped, [EPS])
     assert damping.damped_levels == (0,) and damping.sigma_min[0] == pytest.approx(sigma)
     x = solve_hierarchy(_with_rows(blocks, damping)).x
     assert v @ x == pytest.approx(sigma * (u @ b) / EPS**2, rel=1e-6, abs=1e-8)
@@ -74,7 +77,7 @@ def test_the_scale_and_units_of_the_rows_do_not_matter():
     for scale in (np.array([1.0, 1.0]), np.array([1e-6, 1e-6]), np.array([1e4, 1e4])):
         blocks = [(scale[:, None] * A, scale * b, scale * b)]
         undamped = solve_hierarchy([[blocks[0]]], solver="nullspace").x
-        damping = level_damping(_levels(blocks), undamped, np.ones(5), [EPS])
+        damping = _damping(blocks, undamped, [EPS])
         assert damping.acted
         answers.append(solve_hierarchy(_with_rows(blocks, damping), solver="nullspace").x)
     assert np.allclose(answers[1], answers[0], rtol=1e-7, atol=1e-10)
@@ -93,7 +96,7 @@ def test_a_large_demand_over_a_long_period_raises_the_threshold():
                           (np.array([0.0, 2.0]), 0.0, False)):
         blocks = [(A, b, b)]
         undamped = solve_hierarchy([[blocks[0]]]).x
-        damping = level_damping(_levels(blocks), undamped, np.ones(3), [EPS], dt=dt)
+        damping = _damping(blocks, undamped, [EPS], dt=dt)
         assert damping.acted is damped, (b, dt)
 
 
@@ -109,7 +112,7 @@ def test_damping_leaves_the_lower_levels_all_the_freedom_the_rows_leave():
     b1 = rng.normal(size=3)
     blocks = [(A0, b0, b0), (A1, b1, b1)]
     undamped = solve_hierarchy([[b] for b in blocks]).x
-    damping = level_damping(_levels(blocks), undamped, np.ones(n), [EPS, 0.0])
+    damping = _damping(blocks, undamped, [EPS, 0.0])
     assert damping.damped_levels == (0,)
     x = solve_hierarchy(_with_rows(blocks, damping)).x
     achieved = A0 @ x
@@ -128,7 +131,7 @@ def test_a_conflict_with_a_higher_level_is_damped_in_its_freedom():
     blocks = [(A0, np.zeros(2), np.zeros(2)), (A1, np.ones(1), np.ones(1))]
     assert np.linalg.svd(A1, compute_uv=False)[0] > 1.0
     undamped = solve_hierarchy([[b] for b in blocks]).x
-    damping = level_damping(_levels(blocks), undamped, np.ones(n), [EPS, EPS])
+    damping = _damping(blocks, undamped, [EPS, EPS])
     assert damping.damped_levels == (1,) and damping.sigma_min[1] < 1e-2
     x = solve_hierarchy(_with_rows(blocks, damping)).x
     assert np.allclose(A0 @ x, 0.0, atol=1e-9)  # the higher level is untouched
@@ -142,11 +145,11 @@ def test_inactive_inequality_rows_and_a_zero_threshold_are_not_damped():
     A[1] = A[0] + 1e-5 * rng.normal(size=n)
     blocks = [(A, np.array([0.1, -np.inf]), np.array([0.1, 10.0]))]  # row 1 far from its side
     x = solve_hierarchy([[blocks[0]]]).x
-    assert not level_damping(_levels(blocks), x, np.ones(n), [EPS]).acted
+    assert not _damping(blocks, x, [EPS]).acted
     blocks = [(A, np.array([0.1, 0.3]), np.array([0.1, 0.3]))]
     x = solve_hierarchy([[blocks[0]]]).x
-    assert level_damping(_levels(blocks), x, np.ones(n), [EPS]).acted
-    assert not level_damping(_levels(blocks), x, np.ones(n), [0.0]).acted
+    assert _damping(blocks, x, [EPS]).acted
+    assert not _damping(blocks, x, [0.0]).acted
 
 
 def test_the_metric_and_the_closed_form_agree_with_the_qp():
@@ -160,7 +163,7 @@ def test_the_metric_and_the_closed_form_agree_with_the_qp():
     b1 = rng.normal(size=2)
     blocks = [(A0, b0, b0), (A1, b1, b1)]
     undamped = solve_hierarchy([[b] for b in blocks], weights=W).x
-    damping = level_damping(_levels(blocks), undamped, W, [EPS, EPS])
+    damping = _damping(blocks, undamped, [EPS, EPS], W)
     assert damping.acted
     qp = solve_hierarchy(_with_rows(blocks, damping), weights=W).x
     closed = solve_hierarchy(_with_rows(blocks, damping), weights=W, solver="nullspace").x
@@ -175,6 +178,98 @@ def test_active_hard_rows_restrict_the_freedom():
     blocks = [(A, np.ones(1), np.ones(1))]
     hard = (h[None, :], np.zeros(1), np.zeros(1))
     x = solve_hierarchy([[blocks[0]]], hard=[hard]).x
-    with_hard = level_damping(_levels(blocks), x, np.ones(n), [EPS], hard=hard)
-    alone = level_damping(_levels(blocks), x, np.ones(n), [EPS])
+    with_hard = _damping(blocks, x, [EPS], hard=hard)
+    alone = _damping(blocks, x, [EPS])
     assert with_hard.acted and not alone.acted
+
+
+def _oracle(blocks, x, thresholds, W, dt):
+    """The damping rows from their definition, level by level, without shortcuts (Gram matrices
+    ``D' D`` per level, which do not depend on the signs or the basis of equal singular values)."""
+    n = x.size
+    root = np.sqrt(W)
+    y = x * root
+    Z = np.eye(n)
+    grams = []
+    for (A, lo, hi), eps in zip(blocks, thresholds, strict=True):
+        z = A @ x
+        tol = 1e-7 * max(1.0, np.abs(z).max())
+        act = (lo == hi) | (z <= lo + tol) | (z >= hi - tol)
+        dem = act & ((lo == hi) | (lo > 0) | (hi < 0))
+        U = A / root
+        norms = np.linalg.norm(U, axis=1)
+        U = U / norms[:, None]
+        gram = None
+        if dem.any() and eps > 0 and Z.shape[1]:
+            u, s, vt = np.linalg.svd(U[dem] @ Z)
+            r = int(np.sum(s > 1e-12 * s[0]))
+            target = np.clip(z, lo, hi)[dem] / norms[dem]
+            # the level's target less what the higher levels' motion already gives it
+            demand = u[:, :r].T @ (target - U[dem] @ (y - Z @ (Z.T @ y)))
+            limit = np.maximum(eps**2, dt * np.abs(demand))
+            weak = s[:r] ** 2 < limit
+            if weak.any():
+                lam = np.linalg.norm(u[:, :r][:, weak] * norms[dem][:, None], axis=0)
+                lam = lam * np.sqrt(limit[weak] - s[:r][weak] ** 2)
+                D = lam[:, None] * (vt[:r][weak] @ Z.T) * root
+                gram = D.T @ D
+        grams.append(gram)
+        if act.any() and Z.shape[1]:
+            _, s, vt = np.linalg.svd(U[act] @ Z)
+            Z = Z @ vt[int(np.sum(s > 1e-12 * s[0])):].T
+    return grams
+
+
+@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("dt", [0.0, 0.05, 0.5])
+def test_the_damping_rows_match_their_definition(seed, dt):
+    rng = np.random.default_rng(seed)
+    n = 7
+    W = rng.uniform(0.5, 3.0, n)
+    A0 = rng.normal(size=(2, n))
+    A0[1] = A0[0] + 10.0 ** rng.uniform(-4, 0) * rng.normal(size=n)
+    b0 = rng.normal(size=2)
+    A1 = rng.normal(size=(3, n))
+    A1[2] = A1[0] + 10.0 ** rng.uniform(-4, 0) * rng.normal(size=n)
+    lo1 = np.array([rng.normal(), 0.5, -1.0])  # a floor that excludes zero; a band around it
+    hi1 = np.array([lo1[0], np.inf, 10.0])
+    A2 = A0[:1] + 10.0 ** rng.uniform(-4, 0) * rng.normal(size=(1, n))  # conflicts with level 0
+    b2 = rng.normal(size=1)
+    blocks = [(A0, b0, b0), (A1, lo1, hi1), (A2, b2, b2)]
+    x = solve_hierarchy([[b] for b in blocks], weights=W).x
+    thresholds = [EPS, 0.2, EPS]
+    expected = _oracle(blocks, x, thresholds, W, dt)
+    damping = _damping(blocks, x, thresholds, W, dt=dt)
+    for got, want in zip(damping.rows, expected, strict=True):
+        assert (got is None) == (want is None)
+        if got is not None:
+            assert np.allclose(got.T @ got, want, rtol=1e-6, atol=1e-9 * np.abs(want).max())
+
+
+def test_a_level_that_undoes_a_higher_levels_motion_is_damped_by_its_demand():
+    n = 4
+    A0 = np.eye(n)[:1]  # level 0 moves x0 by 5
+    b0 = np.array([5.0])
+    A1 = np.array([[1.0, 0.3, 0.0, 0.0]])  # sees that motion, cancels it through x1 (weakly)
+    blocks = [(A0, b0, b0), (A1, np.zeros(1), np.zeros(1))]
+    x = solve_hierarchy([[b] for b in blocks]).x
+    assert A1 @ x == pytest.approx(0.0, abs=1e-9)  # the level itself is met: its A x is zero
+    assert not _damping(blocks, x, [0.0, EPS], dt=0.0).acted  # 0.3 is above epsilon
+    damping = _damping(blocks, x, [0.0, EPS], dt=0.05)  # 0.3^2 < dt * |demand| ~ 0.05 * 5
+    assert damping.damped_levels == (1,)
+
+
+def test_an_inactive_row_beside_a_weak_pair_changes_nothing():
+    rng = np.random.default_rng(8)
+    n = 5
+    A = rng.normal(size=(2, n))
+    A[1] = A[0] + 1e-3 * rng.normal(size=n)
+    b = np.array([0.2, 0.1])
+    far = rng.normal(size=(1, n))
+    pair = [(A, b, b)]
+    with_far = [(np.vstack((A, far)), np.append(b, -100.0), np.append(b, 100.0))]
+    x = solve_hierarchy([pair]).x
+    rows = _damping(pair, x, [EPS]).rows[0]
+    rows_far = _damping(with_far, x, [EPS]).rows[0]
+    assert rows is not None and rows_far is not None
+    assert np.allclose(rows_far.T @ rows_far, rows.T @ rows)

@@ -153,11 +153,7 @@ class _StackScheme:
         thresholds = assembler.damping
         if out is None or thresholds is None or not out.solved or self._late(start):
             return out, problem, None
-        hard = problem.hard if problem.mh else None
-        damping = level_damping(
-            [(rows.A, rows.lower, rows.upper, rows.weights) for rows in problem.levels],
-            out.x, problem.W, thresholds,
-            None if hard is None else (hard.A, hard.lower, hard.upper), assembler.dt)
+        damping = level_damping(problem, out.x, thresholds, assembler.dt)
         if not damping.acted:
             return out, problem, None
         damped = assembler.derived(excluded, damping.rows)

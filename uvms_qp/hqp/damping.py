@@ -56,6 +56,7 @@ of the user's problem: a certificate of the user's problem does not apply to it 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -63,6 +64,9 @@ import numpy as np
 from scipy.linalg import lapack
 
 from .._validation import FloatArray
+from .problem import Problem
+
+_GESDD = lapack.dgesdd
 
 #: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
 #: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
@@ -71,7 +75,8 @@ DEFAULT_THRESHOLD = 0.05
 #: Singular values at or below ``RANK_RTOL * sigma_max`` (and ``RANK_ATOL``) count as zero.
 RANK_RTOL = 1e-12
 RANK_ATOL = 1e-15
-#: A row counts as active when it is within ``ACTIVE_RTOL * max(1, |side|)`` of a side.
+#: A row counts as active when it is within ``ACTIVE_RTOL * max(1, max |A x|)`` of a side (the
+#: level rows; hard rows: ``ACTIVE_RTOL`` times the problem's hard scale).
 ACTIVE_RTOL = 1e-7
 
 
@@ -82,10 +87,10 @@ class Damping:
     Attributes:
         rows: Per level, the damping rows ``D_k`` (r_k, n) (targets 0, weight 1), or None for a
             level without damping (threshold 0 or no singular value below it).
-        sigma_min: Per level, the smallest nonzero singular value of its weighted active rows in
-            the freedom the higher levels leave (``inf`` for a level without active rows or
-            freedom, NaN for a level whose threshold is 0 and whose singular values were not
-            computed).
+        sigma_min: Per level, the smallest nonzero singular value of its unit-norm rows that
+            ask for motion, in the freedom the higher levels leave (``inf`` for a level without
+            such rows or without freedom; NaN below the last level with a threshold, whose
+            singular values are not computed).
     """
 
     rows: tuple[FloatArray | None, ...]
@@ -102,118 +107,143 @@ class Damping:
         return tuple(k for k, r in enumerate(self.rows) if r is not None)
 
 
-def _active(A: FloatArray, lo: FloatArray, hi: FloatArray, x: FloatArray) -> np.ndarray:
-    """Rows of ``lo <= A x <= hi`` that are equalities or at (or beyond) a side at ``x``."""
-    y = A @ x
-    with np.errstate(invalid="ignore"):
-        near_lo = y <= lo + ACTIVE_RTOL * np.maximum(1.0, np.abs(lo))
-        near_hi = y >= hi - ACTIVE_RTOL * np.maximum(1.0, np.abs(hi))
-    return np.asarray((lo == hi) | near_lo | near_hi)
-
-
 def _svd(M: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``U`` (m, m), singular values (descending) and ``V'`` (c, c) of ``M`` (m, c)."""
-    u, s, vt, info = lapack.dgesdd(M, compute_uv=1, full_matrices=1)
+    u, s, vt, info = _GESDD(M, compute_uv=1, full_matrices=1)
     if info != 0:  # pragma: no cover - LAPACK's divide and conquer failed; the slow, sure path
         u, s, vt = np.linalg.svd(M, full_matrices=True)
     return u, s, vt
 
 
-def level_damping(
-    levels: Sequence[tuple[FloatArray, FloatArray, FloatArray, FloatArray]],
-    x: FloatArray,
-    metric: FloatArray,
-    thresholds: Sequence[float],
-    hard: tuple[FloatArray, FloatArray, FloatArray] | None = None,
-    dt: float = 0.0,
-) -> Damping:
-    """The damping rows of every level at the undamped answer ``x`` (see the module docstring).
+def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
+                  dt: float = 0.0) -> Damping:
+    """The damping rows of every level of ``problem`` at its undamped answer ``x``.
+
+    See the module docstring. The problem's metric ``W``, row weights, hard rows and sides are
+    read from its buffers.
 
     Args:
-        levels: Per level ``(A, lo, hi, w)``: rows (m_k, n), sides (m_k,), weights (m_k,).
+        problem: The problem (its box is not used).
         x: The undamped answer (n,), which fixes the active inequality rows and the demands.
-        metric: Diagonal ``W`` (n,) of the final regularisation (positive).
         thresholds: Per level ``epsilon`` (>= 0; 0: no damping), dimensionless.
-        hard: Hard rows ``(A, lo, hi)`` (their active rows restrict the freedom), or None.
         dt: Control period [s] of the closed loop (0: no demand term in the threshold).
 
     Returns:
         The damping rows and the smallest singular value of each level.
     """
-    inv_root = 1.0 / np.sqrt(metric)
-    root = np.sqrt(metric)
+    head = problem.head
+    root = np.sqrt(problem.W)
+    A, lo, hi = problem.A[head:], problem.lo[head:], problem.hi[head:]
+    z = A @ x
+    eq = lo == hi
+    if eq.all():  # equality rows only: every row is active and asks for motion
+        active = demanding = eq
+    else:
+        tol = ACTIVE_RTOL * max(1.0, float(np.abs(z).max()))
+        active = eq | (z - lo <= tol) | (hi - z <= tol)  # infinite sides: never within tol
+        demanding = active & (eq | (lo > 0.0) | (hi < 0.0))
+    scaled = A / root  # rows over y = W^(1/2) x
+    norms = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
+    norms[norms == 0.0] = 1.0
+    unit = scaled / norms[:, None]  # unit rows: the row weights and units drop out
+    weighted = norms * np.sqrt(problem.w)  # the weighted rows' own scale, for the damping rows
+    slack = (z - np.minimum(np.maximum(z, lo), hi)) / norms  # what each row misses (normalised)
     y = x * root
-    Z: FloatArray | None = None  # basis of the remaining freedom in y = W^(1/2) x; None: all
-    if hard is not None and hard[0].shape[0]:
-        H = hard[0][_active(*hard, x)] * inv_root
-        if H.shape[0]:
-            _, s, vt = _svd(H)
-            Z = vt[_rank(s):].T
+    Z = _hard_freedom(problem, x, root) if problem.mh else None  # None: all the freedom
     last = max((k for k, e in enumerate(thresholds) if e > 0.0), default=-1)
-    rows: list[FloatArray | None] = []
-    sigmas: list[float] = []
-    for k, (A, lo, hi, w) in enumerate(levels):
-        if k > last:  # no damped level below: nothing more to compute
-            rows.append(None)
-            sigmas.append(float("nan"))
+    p = len(problem.spans)
+    rows: list[FloatArray | None] = [None] * p
+    sigmas = [math.nan] * p
+    for k in range(last + 1):
+        a, b = problem.spans[k][0] - head, problem.spans[k][1] - head
+        act, dem = active[a:b], demanding[a:b]
+        if not act.any() or (Z is not None and Z.shape[1] == 0):
+            sigmas[k] = math.inf
             continue
-        active = _active(A, lo, hi, x)
-        scaled = A * np.sqrt(w)[:, None] * inv_root  # weighted rows over y
-        c = scaled.shape[1] if Z is None else Z.shape[1]
-        demanding = active & ((lo == hi) | (lo > 0.0) | (hi < 0.0))
-        vt = None
-        if not demanding.any() or c == 0:
-            rows.append(None)
-            sigmas.append(float("inf"))
-        else:
-            Ad = scaled[demanding]
-            norms = np.sqrt((Ad * Ad).sum(axis=1))
-            norms[norms == 0.0] = 1.0
-            M = Ad if Z is None else Ad @ Z
-            u, s, vt = _svd(M / norms[:, None])
+        M = unit[a:b][act]
+        if Z is not None:
+            M = M @ Z
+        same = bool(np.array_equal(act, dem))
+        d = np.flatnonzero(dem) + a  # the rows that ask for motion
+        D = M if same else M[dem[act]]
+        yz = y if Z is None else Z.T @ y
+        eps = float(thresholds[k])
+        svd = None
+        if d.size:
+            if same and k < last:  # the vectors are needed for the freedom below anyway
+                svd = _svd(M)
+                s = svd[1]
+            else:  # singular values first: the vectors only when a direction may be weak
+                s = _GESDD(D, compute_uv=0)[1]
             r = _rank(s)
-            sigmas.append(float(s[r - 1]) if r else float("inf"))
-            rows.append(_damping_rows(float(thresholds[k]), dt, u, s, vt, r, norms, Z, root,
-                                      A[demanding] @ x, lo[demanding], hi[demanding],
-                                      np.sqrt(w[demanding]), y))
-        if k < last and c and active.any():
-            if vt is None or not np.array_equal(active, demanding):
-                M = scaled[active] if Z is None else scaled[active] @ Z
-                _, s, vt = _svd(M)
-            null = vt[_rank(s):].T
+            sigmas[k] = float(s[r - 1]) if r else math.inf
+            if r and _may_be_weak(s[:r], eps, dt, float(np.linalg.norm(yz)),
+                                  float(np.linalg.norm(slack[d]))):
+                u, s, vt = svd if svd is not None else _svd(D)
+                rows[k] = _damping_rows(eps, dt, u, s, vt, r, weighted[d], Z, root,
+                                        slack[d], yz)
+        else:
+            sigmas[k] = math.inf
+        if k < last:
+            if svd is None:
+                svd = _svd(M)
+            null = svd[2][_rank(svd[1]):].T
             Z = null if Z is None else Z @ null
     return Damping(tuple(rows), tuple(sigmas))
 
 
+def _may_be_weak(s: FloatArray, eps: float, dt: float, y_norm: float, slack_norm: float) -> bool:
+    """Whether a singular value may be below its threshold, from bounds on the demands.
+
+    The demand along direction ``i`` is ``s_i v_i' Z' y - u_i' slack`` (see
+    :func:`_damping_rows`), at most ``s_i |Z' y| + |slack|`` in size; a direction with
+    ``s_i^2 >= max(eps^2, dt (s_i |Z' y| + |slack|))`` is not weak whatever its vectors.
+    """
+    if eps <= 0.0:
+        return False
+    limit = np.maximum(eps * eps, dt * (s * y_norm + slack_norm))
+    return bool((s * s < limit).any())
+
+
+def _hard_freedom(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArray | None:
+    """Basis (in ``y = W^(1/2) x``) of the freedom the hard rows active at ``x`` leave."""
+    n, head = problem.n, problem.head
+    H, lo, hi = problem.A[n:head], problem.lo[n:head], problem.hi[n:head]
+    z = H @ x
+    tol = ACTIVE_RTOL * problem.hard_scale
+    active = (lo == hi) | (z - lo <= tol) | (hi - z <= tol)
+    if not active.any():
+        return None
+    _, s, vt = _svd(H[active] / root)
+    return np.asarray(vt[_rank(s):].T, dtype=np.float64)
+
+
 def _damping_rows(eps: float, dt: float, u: FloatArray, s: FloatArray, vt: FloatArray, r: int,
-                  norms: FloatArray, Z: FloatArray | None, root: FloatArray, z: FloatArray,
-                  lo: FloatArray, hi: FloatArray, root_w: FloatArray, y: FloatArray
-                  ) -> FloatArray | None:
+                  weighted: FloatArray, Z: FloatArray | None, root: FloatArray,
+                  slack: FloatArray, yz: FloatArray) -> FloatArray | None:
     """The damping rows of one level (None when no direction is below its threshold).
 
-    ``u, s, vt``: SVD of the level's normalised rows in the freedom ``Z`` (rank ``r``);
-    ``z = A x`` and the sides of those rows, their weights' roots, and ``y = W^(1/2) x``.
+    ``u, s, vt``: SVD of the level's unit rows that ask for motion, in the freedom ``Z`` (rank
+    ``r``); ``weighted`` the norms of those rows weighted (over ``y``), ``slack`` what they miss
+    at the undamped answer (normalised) and ``yz = Z' W^(1/2) x`` the undamped answer in ``Z``.
     """
-    if eps <= 0.0 or r == 0:
-        return None
-    limit = np.full(r, eps)
-    if dt > 0.0:  # the demand along each direction, from the undamped answer (normalised units)
-        slack = z - np.minimum(np.maximum(z, lo), hi)
-        yz = y if Z is None else Z.T @ y
-        demand = s[:r] * (vt[:r] @ yz) - u[:, :r].T @ (root_w * slack / norms)
-        limit = np.sqrt(np.maximum(eps * eps, dt * np.abs(demand)))
-    weak = np.flatnonzero(s[:r] < limit)
+    # the demand along each direction, from the undamped answer (normalised units): what the
+    # level's rows achieve there plus what they miss
+    demand = s[:r] * (vt[:r] @ yz) - u[:, :r].T @ slack
+    limit = np.maximum(eps * eps, dt * np.abs(demand))
+    weak = np.flatnonzero(s[:r] * s[:r] < limit)
     if weak.size == 0:
         return None
-    scale = np.linalg.norm(u[:, weak] * norms[:, None], axis=0)  # the rows' own units
-    lam = scale * np.sqrt(limit[weak] ** 2 - s[weak] ** 2)
+    scale = np.linalg.norm(u[:, weak] * weighted[:, None], axis=0)  # the rows' own units
+    lam = scale * np.sqrt(limit[weak] - s[weak] * s[weak])
     directions = vt[weak] if Z is None else vt[weak] @ Z.T  # (r_w, n) in y
     return np.asarray(lam[:, None] * directions * root, dtype=np.float64)
 
 
 def _rank(s: FloatArray) -> int:
     """Number of singular values above the rank tolerance."""
-    if s.size == 0:
+    values = s.tolist()
+    if not values:
         return 0
-    tol = max(RANK_ATOL, RANK_RTOL * float(s[0]))
-    return int(np.count_nonzero(s > tol))
+    tol = max(RANK_ATOL, RANK_RTOL * values[0])
+    return sum(v > tol for v in values)
