@@ -8,13 +8,23 @@ bounds every tick, the others their elbow and shoulder.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
+from closed_loop_examples import (
+    ARMS,
+    DT,
+    arm_stack,
+    beyond_reach,
+    dh_arm,
+    readme_bounds,
+    readme_goal,
+    readme_model,
+    readme_stack,
+    run,
+)
 
 import uvms_qp
-from uvms_qp import Controller, Level, Model, Stack
+from uvms_qp import Controller, Level, Stack
 from uvms_qp.constraints import (
     CommandRateBounds,
     JointPositionBounds,
@@ -23,7 +33,7 @@ from uvms_qp.constraints import (
 )
 from uvms_qp.controller.history import command_reversals
 from uvms_qp.errors import InputError
-from uvms_qp.model import DHRow, Vehicle
+from uvms_qp.hqp.certificate import certify, problem_arrays
 from uvms_qp.tasks import (
     EndEffectorTask,
     ManipulabilityTask,
@@ -32,47 +42,19 @@ from uvms_qp.tasks import (
     Task,
 )
 
-DT = 0.05
-URDF = "tests/data/three_joint_arm.urdf"
-
-
-def _run(model, stack, q, steps, **options):
-    controller = Controller(model, stack, solver="daqp", dt=DT, **options)
-    commands, results = [], []
-    for k in range(steps):
-        result = controller.step(model.state(q), t=k * DT)
-        commands.append(result.zeta.copy())
-        results.append(result)
-        q = model.integrate(q, result.zeta, DT)
-    return np.array(commands), results, q
-
-
-def _readme_stack(goal, station=None):
-    """The README's stack as it stood before the command became a signal (unchanged)."""
-    return Stack(
-        constraints=[JointPositionBounds(), JointVelocityBounds(),
-                     VehicleRateBounds(linear=0.5, angular=0.3)],
-        levels=[
-            Level(EndEffectorTask("tool", position=goal, gain=2.0)),
-            Level(ManipulabilityTask(mode="floor", minimum=0.001)),
-            Level(station or StationKeepingTask(gain=1.0)),
-        ],
-    )
-
 
 @pytest.fixture(scope="module")
 def readme_run():
-    model = uvms_qp.load_model("bluerov2_heavy_alpha5")
-    q = model.home()
-    goal = model.frame_pose(q, "tool")[:3, 3] + [0.3, 0.1, 0.0]
-    commands, results, q = _run(model, _readme_stack(goal), q, 200)
+    model = readme_model()
+    goal = readme_goal(model)
+    commands, results, q = run(model, readme_stack(goal), model.home(), 200)
     return model, goal, commands, results, q
 
 
 def test_the_readme_stack_settles_without_chatter(readme_run):
     model, goal, commands, _, q = readme_run
-    bounds = np.array([0.5] * 3 + [0.3] * 3 + [0.5] * 4)
-    reversals = command_reversals(commands[50:], bounds)
+    bounds = readme_bounds(model)
+    reversals = command_reversals(commands[50:], bounds)  # the last 150 steps
     assert reversals.max() <= 10, dict(zip(model.zeta_names, reversals.tolist(), strict=True))
     state = model.state(q)
     assert np.linalg.norm(state.position("tool") - goal) < 1e-3
@@ -87,13 +69,11 @@ def test_a_station_keeping_level_in_conflict_with_the_tool_does_not_chatter():
     """The README's stack holding only x, y, z and yaw: the station-keeping level, unmet and
     nearly singular in the freedom the tool level leaves, is damped instead of banging the
     vehicle's angular rates and two joints between their bounds."""
-    model = uvms_qp.load_model("bluerov2_heavy_alpha5")
-    q = model.home()
-    goal = model.frame_pose(q, "tool")[:3, 3] + [0.3, 0.1, 0.0]
+    model = readme_model()
+    goal = readme_goal(model)
     station = StationKeepingTask(axes=["x", "y", "z", "psi"], gain=1.0)
-    commands, results, q = _run(model, _readme_stack(goal, station), q, 200)
-    bounds = np.array([0.5] * 3 + [0.3] * 3 + [0.5] * 4)
-    assert command_reversals(commands[50:], bounds).max() <= 10
+    commands, results, q = run(model, readme_stack(goal, station), model.home(), 200)
+    assert command_reversals(commands[50:], readme_bounds(model)).max() <= 10
     assert np.linalg.norm(model.state(q).position("tool") - goal) < 1e-3
     assert any(r.damped_levels for r in results[50:])
 
@@ -105,38 +85,13 @@ def test_the_step_result_reports_the_controllers_reversals(readme_run):
     assert "reversals" in last.summary()
 
 
-def _dh_arm():
-    return Model.from_dh(
-        [DHRow(a=0.0, alpha=math.pi / 2, d=0.1, lower=-2.0, upper=2.0, rate_limit=1.0),
-         DHRow(a=0.3, lower=-1.5, upper=1.5, rate_limit=1.0),
-         DHRow(a=0.25, lower=-2.0, upper=2.0, rate_limit=1.0)],
-        vehicle=Vehicle("fixed"), mount={"xyz": [0.3, 0.0, 0.2]}, tool={"xyz": [0.05, 0.0, 0.0]},
-        home=[0.3, 0.6, -1.0], name="dh_arm")
-
-
-def _urdf_arm():
-    return Model.from_urdf(URDF, tool="gripper", vehicle=Vehicle("fixed"),
-                           mount={"xyz": [0.3, 0.0, 0.2]}, home=[0.3, 0.6, 1.2], name="urdf_arm")
-
-
-def _beyond_reach(model, shoulder, factor=1.02):
-    """A goal 2 % beyond the arm's reach from its shoulder, off the arm's current direction."""
-    state = model.state(model.home())
-    stretched = np.array(state.joints)
-    stretched[-1] = 0.0
-    extended = model.state(model.configuration(state.eta, stretched))
-    reach = np.linalg.norm(extended.position("tool") - extended.position(shoulder))
-    direction = np.array([1.0, 0.3, -0.4]) / np.linalg.norm([1.0, 0.3, -0.4])
-    return state.position(shoulder) + factor * reach * direction, reach
-
-
-@pytest.mark.parametrize(("make", "shoulder"), [(_dh_arm, "link1"), (_urdf_arm, "upper_arm")])
-def test_an_arm_at_its_singularity_does_not_bang_between_its_bounds(make, shoulder):
+@pytest.mark.parametrize("arm", sorted(ARMS))
+def test_an_arm_at_its_singularity_does_not_bang_between_its_bounds(arm):
+    make, shoulder = ARMS[arm]
     model = make()
-    goal, reach = _beyond_reach(model, shoulder)
-    stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds()],
-                  levels=[Level(EndEffectorTask("tool", position=goal, gain=2.0))])
-    commands, _, q = _run(model, stack, model.home(), 200)
+    goal, reach = beyond_reach(model, shoulder)
+    stack = arm_stack(goal)
+    commands, _, q = run(model, stack, model.home(), 200)
     rates = np.asarray(model.joint_rate_limit)
     assert np.all(np.abs(commands) <= rates + 1e-9)
     late = commands[round(1.0 / DT):]
@@ -178,11 +133,11 @@ def _arm_stack(model, goal, *lower):
 
 def test_away_from_singularities_damping_changes_nothing():
     """Along the README's run, at every step where no level is near a singularity, the damped
-    controller adds no row and returns the undamped lexicographic optimum."""
-    model = uvms_qp.load_model("bluerov2_heavy_alpha5")
+    controller adds no row and returns the undamped controller's answer, which the certificate
+    proves the lexicographic optimum of the user's problem (every level met or certified)."""
+    model = readme_model()
     q = model.home()
-    goal = model.frame_pose(q, "tool")[:3, 3] + [0.3, 0.1, 0.0]
-    stack = _readme_stack(goal)
+    stack = readme_stack(readme_goal(model))
     damped, plain = Controller(model, stack, dt=DT), Controller(model, stack, dt=DT, damping=0.0)
     compared = 0
     for k in range(200):
@@ -190,7 +145,9 @@ def test_away_from_singularities_damping_changes_nothing():
         result, reference = damped.step(state, k * DT), plain.step(state, k * DT)
         if not result.damped_levels:
             assert result.status == reference.status
-            np.testing.assert_allclose(result.zeta, reference.zeta, rtol=1e-6, atol=1e-12)
+            np.testing.assert_allclose(result.zeta, reference.zeta, rtol=1e-9, atol=1e-12)
+            certificate = certify(*problem_arrays(damped.assembler.problem), result.zeta)
+            assert certificate.ok, certificate
             compared += 1
         q = model.integrate(q, result.zeta, DT)
     assert compared > 150
@@ -198,8 +155,8 @@ def test_away_from_singularities_damping_changes_nothing():
 
 def _stretched_dh():
     """The DH arm stretched toward a goal 2 % beyond its reach, elbow 0.02 rad from straight."""
-    model = _dh_arm()
-    goal, _ = _beyond_reach(model, "link1")
+    model = dh_arm()
+    goal, _ = beyond_reach(model, "link1")
     state = model.state(model.home())
     joints = np.array(state.joints)
     joints[2] = 0.02
@@ -306,10 +263,10 @@ def test_command_rate_bounds_hold_in_closed_loop_from_rest():
     model = uvms_qp.load_model("bluerov2_heavy_alpha5")
     q = model.home()
     goal = model.frame_pose(q, "tool")[:3, 3] + [0.3, 0.1, 0.0]
-    stack = _readme_stack(goal)
+    stack = readme_stack(goal)
     limit = CommandRateBounds(joint=1.0, linear=1.0, angular=2.0)
     stack = Stack(levels=list(stack.levels), constraints=[*stack.constraints, limit])
-    commands, _, q = _run(model, stack, q, 200)
+    commands, _, q = run(model, stack, q, 200)
     change = np.abs(np.diff(commands, axis=0, prepend=0.0)) / DT  # from rest
     assert np.all(change <= np.array([1.0] * 3 + [2.0] * 3 + [1.0] * 4) + 1e-9)
     assert np.linalg.norm(model.state(q).position("tool") - goal) < 1e-3
@@ -353,8 +310,8 @@ def test_a_floor_within_the_period_condition_settles_on_its_bound(gain):
     level above: with ``gain * dt <= 1`` the measure approaches the floor from above, crosses it
     by no more than the second-order error of one Euler step, and the command settles without a
     reversal."""
-    model = _dh_arm()
-    goal, _ = _beyond_reach(model, "link1", factor=1.2)
+    model = dh_arm()
+    goal, _ = beyond_reach(model, "link1", factor=1.2)
     floor = ManipulabilityTask(mode="floor", minimum=0.02, gain=gain)
     stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds()],
                   levels=[Level(floor), Level(EndEffectorTask("tool", position=goal, gain=2.0))])
@@ -374,7 +331,7 @@ def test_a_floor_within_the_period_condition_settles_on_its_bound(gain):
 
 
 def test_a_floor_that_overshoots_is_refused_with_the_largest_gain():
-    model = _dh_arm()
+    model = dh_arm()
     stack = Stack(levels=[Level(ManipulabilityTask(mode="floor", minimum=0.02, gain=40.0))])
     with pytest.raises(InputError, match=r"levels\[0\].tasks\[0\] \(manipulability\).*"
                                          r"gain \* dt = 40 \* 0.05 = 2 > 1.*gain <= 20"):
