@@ -41,7 +41,7 @@ def test_no_rows_away_from_singularities():
     x = solve_hierarchy([[b] for b in blocks]).x
     damping = _damping(blocks, x, [EPS, EPS])
     assert not damping.acted and damping.damped_levels == ()
-    assert min(damping.sigma_min) > EPS
+    assert min(damping.sigma_min) >= EPS  # a proven lower bound
 
 
 @pytest.mark.parametrize("angle", [0.05, 1e-3, 1e-7])
@@ -183,13 +183,20 @@ def test_active_hard_rows_restrict_the_freedom():
     assert with_hard.acted and not alone.acted
 
 
-def _oracle(blocks, x, thresholds, W, dt):
+def _oracle(blocks, x, thresholds, W, dt, hard=None):
     """The damping rows from their definition, level by level, without shortcuts (Gram matrices
     ``D' D`` per level, which do not depend on the signs or the basis of equal singular values)."""
     n = x.size
     root = np.sqrt(W)
     y = x * root
     Z = np.eye(n)
+    if hard is not None:
+        H, lo, hi = hard
+        z = H @ x
+        act = (lo == hi) | (z <= lo + 1e-7 * max(1.0, np.abs(lo).max())) | (z >= hi - 1e-7)
+        if act.any():
+            _, s, vt = np.linalg.svd(H[act] / root)
+            Z = vt[int(np.sum(s > 1e-12 * s[0])):].T
     grams = []
     for (A, lo, hi), eps in zip(blocks, thresholds, strict=True):
         z = A @ x
@@ -273,3 +280,56 @@ def test_an_inactive_row_beside_a_weak_pair_changes_nothing():
     rows_far = _damping(with_far, x, [EPS]).rows[0]
     assert rows is not None and rows_far is not None
     assert np.allclose(rows_far.T @ rows_far, rows.T @ rows)
+
+
+def _random_stack(rng, n, hard_rows):
+    """Three levels of random rows, some nearly dependent, some inequalities, some hard rows."""
+    blocks = []
+    for m in rng.integers(1, 5, size=3):
+        A = rng.normal(size=(m, n))
+        if m > 1 and rng.random() < 0.5:
+            A[-1] = A[0] + 10.0 ** rng.uniform(-3, 0) * rng.normal(size=n)
+        b = rng.normal(size=m)
+        lo, hi = b.copy(), b.copy()
+        loose = rng.random(m) < 0.3
+        lo[loose], hi[loose] = -np.inf, b[loose] + rng.uniform(-0.5, 2.0, size=loose.sum())
+        blocks.append((A, lo, hi))
+    hard = None
+    if hard_rows:
+        hard = (rng.normal(size=(hard_rows, n)), np.full(hard_rows, -0.2), np.full(hard_rows, 0.2))
+    return blocks, hard
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_screen_never_hides_a_weak_direction(seed):
+    """Random stacks of 4 to 9 variables whose levels fit, fill or overflow the freedom, near
+    and far from their thresholds: the answer with the screen is the definition's."""
+    rng = np.random.default_rng(100 + seed)
+    n = int(rng.integers(4, 10))
+    blocks, hard = _random_stack(rng, n, int(rng.integers(0, 3)))
+    W = rng.uniform(0.5, 3.0, n)
+    x = solve_hierarchy([[b] for b in blocks], weights=W,
+                        hard=None if hard is None else [hard]).x
+    thresholds = list(rng.choice([0.0, 0.05, 0.3], size=3))
+    dt = float(rng.choice([0.0, 0.05, 0.2]))
+    damping = _damping(blocks, x, thresholds, W, hard=hard, dt=dt)
+    expected = _oracle(blocks, x, thresholds, W, dt, hard)
+    for got, want in zip(damping.rows, expected, strict=True):
+        assert (got is None) == (want is None)
+        if got is not None:
+            assert np.allclose(got.T @ got, want, rtol=1e-6, atol=1e-9 * np.abs(want).max())
+
+
+def test_rank_deficient_hard_rows_leave_the_levels_their_freedom():
+    """As many active hard rows as variables but of rank n - 1: the level keeps one direction,
+    nearly singular, and is damped there."""
+    n = 3
+    h = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]])
+    hard = (h, np.zeros(3), np.zeros(3))
+    A = np.array([[1.0, 0.0, 1e-3]])  # sees the free direction z only weakly
+    blocks = [(A, np.ones(1), np.ones(1))]
+    x = solve_hierarchy([[blocks[0]]], hard=[hard]).x
+    damping = _damping(blocks, x, [EPS], hard=hard)
+    assert damping.damped_levels == (0,)
+    expected = _oracle(blocks, x, [EPS], np.ones(n), 0.0, hard)[0]
+    assert np.allclose(damping.rows[0].T @ damping.rows[0], expected)

@@ -49,6 +49,11 @@ from, not a kinematic constraint of the level). The active set is the undamped a
 inequality row of a higher level that a lower level pushes onto its side enters that level's
 freedom: near a singularity, such a lower level can change how a higher one is damped.
 
+Cost: a screen first tests all the levels at once against lower bounds on their singular values
+(one or two Cholesky factorisations of Gram matrices of the stacked unit active rows, see
+:func:`_screen`). Away from singularities it proves that no direction is weak and nothing else is
+computed; otherwise the levels are examined one by one as above.
+
 A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
 of the user's problem: a certificate of the user's problem does not apply to it (see
 :class:`Damping`).
@@ -67,11 +72,16 @@ from .._validation import FloatArray
 from .problem import Problem
 
 _GESDD = lapack.dgesdd
+_POTRF = lapack.dpotrf
+_TINY = 1e-300
 
 #: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
 #: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
 #: its directions are damped (dimensionless; a row at about 3 degrees from the span of the others).
 DEFAULT_THRESHOLD = 0.05
+#: The screen's floor on a block's smallest singular value (unit rows): below it, the block may
+#: be rank deficient and the levels are examined one by one.
+SCREEN_RANK = 1e-6
 #: Singular values at or below ``RANK_RTOL * sigma_max`` (and ``RANK_ATOL``) count as zero.
 RANK_RTOL = 1e-12
 RANK_ATOL = 1e-15
@@ -120,7 +130,9 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     """The damping rows of every level of ``problem`` at its undamped answer ``x``.
 
     See the module docstring. The problem's metric ``W``, row weights, hard rows and sides are
-    read from its buffers.
+    read from its buffers. A screen first bounds every level's singular values from below by
+    those of the stacked active rows (:func:`_screen`); only when that cannot prove that no
+    direction is weak are the levels examined one by one.
 
     Args:
         problem: The problem (its box is not used).
@@ -129,33 +141,41 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         dt: Control period [s] of the closed loop (0: no demand term in the threshold).
 
     Returns:
-        The damping rows and the smallest singular value of each level.
+        The damping rows and the smallest singular value of each level (a lower bound on it
+        when the screen proves that no level needs damping).
     """
-    head = problem.head
-    root = np.sqrt(problem.W)
-    A, lo, hi = problem.A[head:], problem.lo[head:], problem.hi[head:]
+    p = len(problem.spans)
+    last = max((k for k, e in enumerate(thresholds) if e > 0.0), default=-1)
+    if last < 0:
+        return Damping((None,) * p, (math.nan,) * p)
+    head, end = problem.head, problem.spans[last][1]
+    A, lo, hi = problem.A[head:end], problem.lo[head:end], problem.hi[head:end]
     z = A @ x
     eq = lo == hi
-    if eq.all():  # equality rows only: every row is active and asks for motion
-        active = demanding = eq
-    else:
-        tol = ACTIVE_RTOL * max(1.0, float(np.abs(z).max()))
-        active = eq | (z - lo <= tol) | (hi - z <= tol)  # infinite sides: never within tol
-        demanding = active & (eq | (lo > 0.0) | (hi < 0.0))
+    tol = ACTIVE_RTOL * max(1.0, float(np.abs(z).max()))
+    # a row is active at (or beyond) a side: infinite sides never are
+    active = eq | (z - lo <= tol) | (hi - z <= tol)
+    slack = z - np.minimum(np.maximum(z, lo), hi)  # what each row misses
+    root = np.sqrt(problem.W)
+    hard = _active_hard(problem, x, root) if problem.mh else None
+    eps = [float(e) for e in thresholds[:last + 1]]
+    spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+    y_norm = math.sqrt(float(x @ (problem.W * x)))
+    bounds = _screen(A, root, active, eq, lo, hi, slack, hard, spans, eps, dt, y_norm)
+    if bounds is not None:
+        return Damping((None,) * p, (*bounds, *(math.nan,) * (p - last - 1)))
+    demanding = active & (eq | (lo > 0.0) | (hi < 0.0))  # a side that excludes zero
+    y = x * root
     scaled = A / root  # rows over y = W^(1/2) x
     norms = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
     norms[norms == 0.0] = 1.0
     unit = scaled / norms[:, None]  # unit rows: the row weights and units drop out
-    weighted = norms * np.sqrt(problem.w)  # the weighted rows' own scale, for the damping rows
-    slack = (z - np.minimum(np.maximum(z, lo), hi)) / norms  # what each row misses (normalised)
-    y = x * root
-    Z = _hard_freedom(problem, x, root) if problem.mh else None  # None: all the freedom
-    last = max((k for k, e in enumerate(thresholds) if e > 0.0), default=-1)
-    p = len(problem.spans)
+    slack = slack / norms  # what each row misses (normalised)
+    weighted = norms * np.sqrt(problem.w[:end - head])  # the weighted rows' own scale
+    Z = None if hard is None else _null(hard)  # None: all the freedom
     rows: list[FloatArray | None] = [None] * p
     sigmas = [math.nan] * p
-    for k in range(last + 1):
-        a, b = problem.spans[k][0] - head, problem.spans[k][1] - head
+    for k, (a, b) in enumerate(spans):
         act, dem = active[a:b], demanding[a:b]
         if not act.any() or (Z is not None and Z.shape[1] == 0):
             sigmas[k] = math.inf
@@ -167,20 +187,19 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         d = np.flatnonzero(dem) + a  # the rows that ask for motion
         D = M if same else M[dem[act]]
         yz = y if Z is None else Z.T @ y
-        eps = float(thresholds[k])
         svd = None
         if d.size:
             if same and k < last:  # the vectors are needed for the freedom below anyway
                 svd = _svd(M)
-                s = svd[1]
+                sv = svd[1]
             else:  # singular values first: the vectors only when a direction may be weak
-                s = _GESDD(D, compute_uv=0)[1]
-            r = _rank(s)
-            sigmas[k] = float(s[r - 1]) if r else math.inf
-            if r and _may_be_weak(s[:r], eps, dt, float(np.linalg.norm(yz)),
+                sv = _GESDD(D, compute_uv=0)[1]
+            r = _rank(sv)
+            sigmas[k] = float(sv[r - 1]) if r else math.inf
+            if r and _may_be_weak(sv[:r], eps[k], dt, float(np.linalg.norm(yz)),
                                   float(np.linalg.norm(slack[d]))):
-                u, s, vt = svd if svd is not None else _svd(D)
-                rows[k] = _damping_rows(eps, dt, u, s, vt, r, weighted[d], Z, root,
+                u, sv, vt = svd if svd is not None else _svd(D)
+                rows[k] = _damping_rows(eps[k], dt, u, sv, vt, r, weighted[d], Z, root,
                                         slack[d], yz)
         else:
             sigmas[k] = math.inf
@@ -205,16 +224,144 @@ def _may_be_weak(s: FloatArray, eps: float, dt: float, y_norm: float, slack_norm
     return bool((s * s < limit).any())
 
 
-def _hard_freedom(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArray | None:
-    """Basis (in ``y = W^(1/2) x``) of the freedom the hard rows active at ``x`` leave."""
+def _needed(eps: float, dt: float, y_norm: float, slack_norm: float) -> float:
+    """The least singular value that is not weak whatever the direction's vectors.
+
+    ``max(eps, s*)`` with ``s*`` the positive root of ``s^2 = dt (s |y| + |slack|)``: above
+    both, ``s^2 >= max(eps^2, dt (s |Z' y| + |slack|))`` (:func:`_may_be_weak`).
+    """
+    t = dt * y_norm
+    return max(eps, 0.5 * (t + math.sqrt(t * t + 4.0 * dt * slack_norm)))
+
+
+def _unit(rows: FloatArray, root: FloatArray) -> FloatArray:
+    """``rows`` over ``y = W^(1/2) x`` scaled to unit norm (zero rows stay zero)."""
+    scaled = rows / root
+    norms = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
+    norms[norms == 0.0] = 1.0
+    return np.asarray(scaled / norms[:, None], dtype=np.float64)
+
+
+def _above(G: FloatArray, floor: float, scale: FloatArray | None = None) -> bool:
+    """Whether ``G - floor^2 diag(scale)`` is positive definite (``G`` is overwritten).
+
+    With ``G`` the Gram matrix of a block of rows (``R R'`` for a wide block, with ``scale`` its
+    own diagonal ``D^2``; ``R' D^-2 R`` for a tall one, with ``scale`` None for ``I``, ``D`` the
+    row norms): every singular value of the unit rows ``D^-1 R`` (the ``min(m, n)`` of them)
+    exceeds ``floor``. A Cholesky factorisation succeeds exactly when the matrix is positive
+    definite.
+    """
+    diagonal = G.flat[::G.shape[0] + 1]
+    if scale is None:
+        G.flat[::G.shape[0] + 1] = diagonal - floor * floor
+    else:
+        G.flat[::G.shape[0] + 1] = diagonal - floor * floor * scale
+    return bool(_POTRF(G, lower=0, clean=0, overwrite_a=1)[1] == 0)
+
+
+def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, eq: np.ndarray,
+            lo: FloatArray, hi: FloatArray, slack: FloatArray, hard: FloatArray | None,
+            spans: Sequence[tuple[int, int]], eps: Sequence[float], dt: float,
+            y_norm: float) -> list[float] | None:
+    """Lower bounds on each level's singular values when they prove that no level needs damping.
+
+    The singular values of a level's rows in the freedom ``Z`` the rows above it leave are
+    bounded from below by those of all the rows down to it stacked: with ``H`` the rows above,
+    ``min_u_H |H' u_H + A_k' u| = |Z Z' A_k' u|``, so ``sigma_min([H; A_k]) <= sigma_min(A_k Z)``
+    (for a stack of more than ``n`` rows, its ``n``-th value bounds the ``dim Z``-th of
+    ``A_k Z``), and a stack of at most ``n`` rows only loses in its smallest value when rows are
+    added (interlacing), as the rows that ask for motion gain against all the active rows. So
+    one test of the unit active rows (the active hard rows first) of the levels that fit in
+    ``n`` rows bounds all of them; the level whose rows overflow the freedom left is tested with
+    the rows above it (its rows that ask for motion too, when they are fewer), and when those
+    rows have rank ``n`` the levels below have no freedom. Each test is a Cholesky
+    factorisation of a Gram matrix (:func:`_above`) at the least value that rules out a weak
+    direction of every level it covers (:func:`_needed`, with the level's slack).
+
+    Args:
+        A: Level rows (m, n) of the levels ``0..last`` (not normalised).
+        root: ``W^(1/2)`` (n,).
+        active: Per row, active at the undamped answer.
+        eq: Per row, an equality.
+        lo: Lower sides (m,).
+        hi: Upper sides (m,).
+        slack: Per row, what it misses (in the row's own units).
+        hard: The active hard rows (unit, over ``y``), or None.
+        spans: ``(start, end)`` of each level's rows in ``A``.
+        eps: Threshold per level.
+        dt: Control period [s].
+        y_norm: ``|W^(1/2) x|``.
+
+    Returns:
+        Per level a proven lower bound on its smallest singular value (``inf`` for a level
+        without active rows in the freedom left), or None when the tests cannot prove that no
+        level needs damping.
+    """
+    n, p = A.shape[1], len(spans)
+    act = active.tolist()
+    mh = 0 if hard is None else hard.shape[0]
+    counts = [sum(act[a:b]) for a, b in spans]  # active rows per level
+    fit, used = 0, mh  # the levels whose active rows, with those above, fit in n rows
+    while fit < p and used + counts[fit] <= n:
+        used += counts[fit]
+        fit += 1
+    last = spans[min(fit, p - 1)][1]  # down to the level that overflows, if one does
+    picked = np.flatnonzero(active[:last])
+    scaled = A[picked] / root  # rows over y
+    if mh:
+        scaled = np.vstack((hard, scaled))
+    gram = scaled.dot(scaled.T)
+    squares = gram.diagonal().copy()  # squared row norms
+    np.maximum(squares, _TINY, out=squares)  # a zero row stays zero: its block fails the test
+    missed = (slack[picked] ** 2 / squares[mh:]).tolist()  # squared unit slacks
+    floors, start = [], 0
+    for k in range(min(fit + 1, p)):  # the least value each level's directions may have
+        own = math.sqrt(sum(missed[start:start + counts[k]]))
+        floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)) if eps[k] > 0.0
+                      and counts[k] else SCREEN_RANK)
+        start += counts[k]
+    bounds = [math.inf] * p
+    floor = max(floors[:fit], default=SCREEN_RANK)
+    if used and not _above(gram[:used, :used].copy(), floor, squares[:used]):
+        return None
+    for k in range(fit):
+        if counts[k] and eps[k] > 0.0:
+            bounds[k] = floor
+    if fit == p or used >= n:
+        return bounds
+    a, b = spans[fit]  # the level whose rows overflow the freedom left
+    need = floors[fit]
+    if not _above(scaled.T.dot(scaled / squares[:, None]), need):  # rank n: no freedom below
+        return None
+    if eps[fit] > 0.0:
+        asks = (eq[a:b] | (lo[a:b] > 0.0) | (hi[a:b] < 0.0))[active[a:b]]
+        if not asks.all():  # fewer rows ask for motion: test them with the rows above
+            keep = np.concatenate((np.ones(used, dtype=bool), asks))
+            rows = scaled[keep] / np.sqrt(squares[keep])[:, None]
+            if not asks.any():
+                need = math.inf
+            elif not _above(rows.dot(rows.T) if rows.shape[0] <= n else rows.T.dot(rows),
+                            need):
+                return None
+        bounds[fit] = need
+    return bounds
+
+
+def _active_hard(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArray:
+    """The hard rows active at ``x``, scaled to unit norm over ``y = W^(1/2) x``."""
     n, head = problem.n, problem.head
     H, lo, hi = problem.A[n:head], problem.lo[n:head], problem.hi[n:head]
     z = H @ x
     tol = ACTIVE_RTOL * problem.hard_scale
-    active = (lo == hi) | (z - lo <= tol) | (hi - z <= tol)
-    if not active.any():
+    rows = _unit(H[(lo == hi) | (z - lo <= tol) | (hi - z <= tol)], root)
+    return np.asarray(rows[np.einsum("ij,ij->i", rows, rows) > 0.0], dtype=np.float64)
+
+
+def _null(rows: FloatArray) -> FloatArray | None:
+    """Orthonormal basis of the freedom ``rows`` leave (None: all of it, no rows)."""
+    if rows.shape[0] == 0:
         return None
-    _, s, vt = _svd(H[active] / root)
+    _, s, vt = _svd(rows)
     return np.asarray(vt[_rank(s):].T, dtype=np.float64)
 
 
