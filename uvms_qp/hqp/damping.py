@@ -73,7 +73,6 @@ from .problem import Problem
 
 _GESDD = lapack.dgesdd
 _POTRF = lapack.dpotrf
-_TINY = 1e-300
 
 #: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
 #: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
@@ -151,19 +150,20 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     head, end = problem.head, problem.spans[last][1]
     A, lo, hi = problem.A[head:end], problem.lo[head:end], problem.hi[head:end]
     z = A @ x
-    eq = lo == hi
+    clipped = np.minimum(np.maximum(z, lo), hi)
+    slack = z - clipped  # what each row misses
     tol = ACTIVE_RTOL * max(1.0, float(np.abs(z).max()))
-    # a row is active at (or beyond) a side: infinite sides never are
-    active = eq | (z - lo <= tol) | (hi - z <= tol)
-    slack = z - np.minimum(np.maximum(z, lo), hi)  # what each row misses
+    # active: at or beyond a side (an equality row always; an infinite side never)
+    active = (clipped - lo <= tol) | (hi - clipped <= tol)
     root = np.sqrt(problem.W)
     hard = _active_hard(problem, x, root) if problem.mh else None
     eps = [float(e) for e in thresholds[:last + 1]]
     spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
-    y_norm = math.sqrt(float(x @ (problem.W * x)))
-    bounds = _screen(A, root, active, eq, lo, hi, slack, hard, spans, eps, dt, y_norm)
+    y_norm = math.sqrt(float(x.dot(problem.W * x)))
+    bounds = _screen(A, root, active, lo, hi, slack, hard, spans, eps, dt, y_norm)
     if bounds is not None:
         return Damping((None,) * p, (*bounds, *(math.nan,) * (p - last - 1)))
+    eq = lo == hi
     demanding = active & (eq | (lo > 0.0) | (hi < 0.0))  # a side that excludes zero
     y = x * root
     scaled = A / root  # rows over y = W^(1/2) x
@@ -242,25 +242,21 @@ def _unit(rows: FloatArray, root: FloatArray) -> FloatArray:
     return np.asarray(scaled / norms[:, None], dtype=np.float64)
 
 
-def _above(G: FloatArray, floor: float, scale: FloatArray | None = None) -> bool:
-    """Whether ``G - floor^2 diag(scale)`` is positive definite (``G`` is overwritten).
+def _above(G: FloatArray, floor2: FloatArray | float) -> bool:
+    """Whether ``G - diag(floor2)`` is positive definite (``G`` is overwritten).
 
-    With ``G`` the Gram matrix of a block of rows (``R R'`` for a wide block, with ``scale`` its
-    own diagonal ``D^2``; ``R' D^-2 R`` for a tall one, with ``scale`` None for ``I``, ``D`` the
-    row norms): every singular value of the unit rows ``D^-1 R`` (the ``min(m, n)`` of them)
-    exceeds ``floor``. A Cholesky factorisation succeeds exactly when the matrix is positive
-    definite.
+    With ``G`` the Gram matrix of a block of rows ``R`` (``R R'`` for a wide block, with
+    ``floor2 = floor^2 D^2``, ``D`` its row norms; ``R' D^-2 R`` for a tall one, with
+    ``floor2 = floor^2``): every singular value of the unit rows ``D^-1 R`` (the ``min(m, n)``
+    of them) exceeds ``floor``. A Cholesky factorisation succeeds exactly when the matrix is
+    positive definite.
     """
-    diagonal = G.flat[::G.shape[0] + 1]
-    if scale is None:
-        G.flat[::G.shape[0] + 1] = diagonal - floor * floor
-    else:
-        G.flat[::G.shape[0] + 1] = diagonal - floor * floor * scale
+    G.flat[::G.shape[0] + 1] -= floor2
     return bool(_POTRF(G, lower=0, clean=0, overwrite_a=1)[1] == 0)
 
 
-def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, eq: np.ndarray,
-            lo: FloatArray, hi: FloatArray, slack: FloatArray, hard: FloatArray | None,
+def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, lo: FloatArray,
+            hi: FloatArray, slack: FloatArray, hard: FloatArray | None,
             spans: Sequence[tuple[int, int]], eps: Sequence[float], dt: float,
             y_norm: float) -> list[float] | None:
     """Lower bounds on each level's singular values when they prove that no level needs damping.
@@ -282,7 +278,6 @@ def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, eq: np.ndarray,
         A: Level rows (m, n) of the levels ``0..last`` (not normalised).
         root: ``W^(1/2)`` (n,).
         active: Per row, active at the undamped answer.
-        eq: Per row, an equality.
         lo: Lower sides (m,).
         hi: Upper sides (m,).
         slack: Per row, what it misses (in the row's own units).
@@ -311,18 +306,23 @@ def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, eq: np.ndarray,
     if mh:
         scaled = np.vstack((hard, scaled))
     gram = scaled.dot(scaled.T)
-    squares = gram.diagonal().copy()  # squared row norms
-    np.maximum(squares, _TINY, out=squares)  # a zero row stays zero: its block fails the test
-    missed = (slack[picked] ** 2 / squares[mh:]).tolist()  # squared unit slacks
-    floors, start = [], 0
-    for k in range(min(fit + 1, p)):  # the least value each level's directions may have
-        own = math.sqrt(sum(missed[start:start + counts[k]]))
-        floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)) if eps[k] > 0.0
-                      and counts[k] else SCREEN_RANK)
-        start += counts[k]
+    squares = gram.diagonal().tolist()  # squared row norms
+    if min(squares, default=1.0) <= 0.0:
+        return None  # a zero active row
+    missed = slack[picked].tolist()
+    floors, start = [], mh  # the least value each level's directions may have
+    for k in range(min(fit + 1, p)):
+        c = counts[k]
+        if eps[k] > 0.0 and c:
+            own = math.sqrt(sum(v * v / q for v, q in zip(
+                missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
+            floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
+        else:
+            floors.append(SCREEN_RANK)
+        start += c
     bounds = [math.inf] * p
     floor = max(floors[:fit], default=SCREEN_RANK)
-    if used and not _above(gram[:used, :used].copy(), floor, squares[:used]):
+    if used and not _above(gram[:used, :used].copy(), floor * floor * gram.diagonal()[:used]):
         return None
     for k in range(fit):
         if counts[k] and eps[k] > 0.0:
@@ -331,18 +331,20 @@ def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, eq: np.ndarray,
         return bounds
     a, b = spans[fit]  # the level whose rows overflow the freedom left
     need = floors[fit]
-    if not _above(scaled.T.dot(scaled / squares[:, None]), need):  # rank n: no freedom below
+    unit = scaled / np.sqrt(gram.diagonal())[:, None]
+    if not _above(unit.T.dot(unit), need * need):  # rank n: no freedom below
         return None
     if eps[fit] > 0.0:
-        asks = (eq[a:b] | (lo[a:b] > 0.0) | (hi[a:b] < 0.0))[active[a:b]]
-        if not asks.all():  # fewer rows ask for motion: test them with the rows above
-            keep = np.concatenate((np.ones(used, dtype=bool), asks))
-            rows = scaled[keep] / np.sqrt(squares[keep])[:, None]
-            if not asks.any():
+        asks = [low == high or low > 0.0 or high < 0.0 for low, high, on in
+                zip(lo[a:b].tolist(), hi[a:b].tolist(), act[a:b], strict=True) if on]
+        if not all(asks):  # fewer rows ask for motion: test them with the rows above
+            if not any(asks):
                 need = math.inf
-            elif not _above(rows.dot(rows.T) if rows.shape[0] <= n else rows.T.dot(rows),
-                            need):
-                return None
+            else:
+                rows = unit[np.flatnonzero([True] * used + asks)]
+                G = rows.dot(rows.T) if rows.shape[0] <= n else rows.T.dot(rows)
+                if not _above(G, need * need):
+                    return None
         bounds[fit] = need
     return bounds
 
