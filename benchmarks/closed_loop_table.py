@@ -1,10 +1,10 @@
 """The command as a signal in closed loop, before and after: a markdown table per example.
 
-Runs the closed-loop examples of ``tests/closed_loop_examples.py`` (the README's stack; a DH-built
-and a URDF arm with a goal 2 % beyond reach) and every bundled scenario under every scheme it
-names (``uvms-qp compare``), once with the library in this repository and once with the library
-in ``--before`` (another checkout), each in a fresh process whose ``PYTHONPATH`` is that
-checkout. Every figure is computed here, by this repository's code, from the commands each run
+Runs the closed-loop examples of ``tests/support/closed_loop_examples.py`` (the README's stack;
+a DH-built and a URDF arm with a goal 2 % beyond reach) and every bundled scenario under every
+scheme it names (``uvms-qp compare``), once with the library in this repository and once with
+the library in ``--before`` (another checkout), each in a fresh process whose ``PYTHONPATH`` is
+that checkout. Every figure is computed here, by this repository's code, from the commands each run
 sent, so both sides are measured by the same rule:
 
 - reversals: sign changes between consecutive commands both above 1 % of the entry's bound
@@ -37,7 +37,7 @@ from uvms_qp.sim.metrics import axis_bounds
 from uvms_qp.sim.scenario import bundled_scenarios
 
 ROOT = Path(__file__).resolve().parent.parent
-TESTS = ROOT / "tests"
+EXAMPLES = ROOT / "tests" / "support" / "closed_loop_examples.py"
 #: Start-up transient [s] left out of the per-second figures.
 TRANSIENT = 1.0
 #: Steps counted at the end of the README's run (of 200).
@@ -57,7 +57,7 @@ def child(tree: Path, args: list[str], cwd: Path) -> subprocess.CompletedProcess
 
 
 def run_example(tree: Path, example: str, cwd: Path) -> dict:
-    proc = child(tree, [str(TESTS / "closed_loop_examples.py"), example], cwd)
+    proc = child(tree, [str(EXAMPLES), example], cwd)
     if proc.returncode != 0:
         raise SystemExit(f"{example} with {tree} failed:\n{proc.stderr[-2000:]}")
     return json.loads(proc.stdout)

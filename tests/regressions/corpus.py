@@ -2,7 +2,7 @@
 
 A problem that made a test fail is saved with :func:`save_problem` (from a test, a debugging
 session or the soak benchmark) and is then replayed on every installed back-end by
-``tests/test_reliability_regressions.py``. File layout (all float64 unless stated):
+``tests/regressions/test_corpus.py``. File layout (all float64 unless stated):
 
 * ``n`` (int), ``lower``, ``upper``, ``W``: size, hard box, metric;
 * ``hard_A``, ``hard_lo``, ``hard_hi``: hard rows;

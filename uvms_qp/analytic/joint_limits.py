@@ -1,4 +1,4 @@
-"""Joint-limit index of ``003_229789978cc4b235.txt, Eq. (15)-(17)`` (Chan and Dubey).
+"""Joint-limit index of Wang et al. (2017), Eq. (15)-(17) (Chan and Dubey).
 
 ``H(q) = sum_i (q_max,i - q_min,i)^2 / (C_i (q_max,i - q_i) (q_i - q_min,i))`` (dimensionless,
 smallest ``4 / C_i`` per joint at mid-range, infinite at a limit) and its gradient

@@ -17,7 +17,7 @@ from .inverses import _pinv
 def manipulability(J: Any) -> float:
     """Yoshikawa's measure ``rho = sqrt(det(J J^T)) = prod_i sigma_i``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (18)``; ``003_229789978cc4b235.txt, Eq. (18)``. Zero when ``J``
+    Soylu et al. (2007), Eq. (18); Wang et al. (2017), Eq. (18). Zero when ``J``
     has fewer columns than rows or loses row rank. For paper 000's collective Jacobian
     ``J_a = [J_p; J_s]`` with ``J_s = [I 0]`` (vehicle pose), ``rho(J_a)`` equals the
     manipulability of the arm columns of ``J_p`` alone (Schur complement).
@@ -37,7 +37,7 @@ def manipulability(J: Any) -> float:
 def manipulability_gradient(J: Any, dJ: Any) -> FloatArray:
     """Gradient ``d rho / d q_i = rho * trace(dJ/dq_i J^+)``.
 
-    ``000_7b5f597fe4e36aa4.txt, Eq. (19)``; ``003_229789978cc4b235.txt, Eq. (19)``. Valid where
+    Soylu et al. (2007), Eq. (19); Wang et al. (2017), Eq. (19). Valid where
     ``J`` has full row rank (rho > 0); returns zeros where rho = 0.
 
     Args:
@@ -87,7 +87,7 @@ def jacobian_derivatives(
 
 
 def shaping_function(rho: Any, rho_bar: float) -> Any:
-    """Shaping function k(rho) of ``000_7b5f597fe4e36aa4.txt, Eq. (21)`` (Fig. 4).
+    """Shaping function k(rho) of Soylu et al. (2007), Eq. (21) (Fig. 4).
 
     The text fixes k = 0 for ``rho >= rho_bar``, k = 1 for ``rho < rho_bar / 2`` and a blend in
     between; the figure with the exact curve is not in the text. This reconstruction uses the
@@ -128,7 +128,7 @@ def _shaping(rho: float, rho_bar: float) -> float:
 
 
 def sign_switch(rho_rate: float) -> float:
-    """Switch ``(1 - sign(rho_dot)) / 2`` of ``000_7b5f597fe4e36aa4.txt, Eq. (21)``.
+    """Switch ``(1 - sign(rho_dot)) / 2`` of Soylu et al. (2007), Eq. (21).
 
     With the paper's convention ``sign(rho_dot) = -1`` for ``rho_dot <= 0``: returns 1 while
     manipulability is not increasing (the gradient term acts) and 0 while it increases.
@@ -151,7 +151,7 @@ def dexterous_task_priority(
     rho_rate: float | None = None,
     rcond: float = 1e-10,
 ) -> FloatArray:
-    """Dexterous task priority of ``000_7b5f597fe4e36aa4.txt, Eq. (21)``.
+    """Dexterous task priority of Soylu et al. (2007), Eq. (21).
 
     ``qdot = J_wp^+ xp + (I - J_wp^+ Jp) ((1 - k) Js^+ xs + k s lambda grad rho)``,
     ``s = (1 - sign(rho_dot)) / 2``

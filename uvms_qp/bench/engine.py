@@ -8,11 +8,13 @@ key is already stored are skipped.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..errors import InputError
 from .metrics import Summary, summarize
 from .record import Record
 from .report import CsvStore, JsonStore, machine_info
@@ -70,8 +72,6 @@ def run_benchmark(
         InputError: unknown set, a solver pattern matching nothing, a bad repetition count or a
             store file that is not a benchmark file.
     """
-    from ..errors import InputError
-
     if not isinstance(repetitions, int) or repetitions < 1:
         raise InputError(f"--repetitions: expected a positive integer, got {repetitions!r}")
     config = config or SetConfig()
@@ -124,8 +124,6 @@ def run_benchmark(
         new.extend(batch)
     wall = time.perf_counter() - started
     if json_store is not None:
-        import os
-
         json_store.finish_run({"wall_time_s": wall, "new_rows": len(new),
                                "skipped_rows": skipped, "loadavg_end": list(os.getloadavg())})
     current = {(p.set, p.name) for p in problems}

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .record import Record
+from .record import Record, percentile
 
 #: Shift of the shifted geometric mean [us].
 SGM_SHIFT_US = 10.0
@@ -44,11 +44,6 @@ TIERS: dict[str, float] = {"high": 1e-6, "low": 1e-3}
 #: Rows excluded from the "best solution found": they solve another problem (soft priorities),
 #: so within the comparison tolerance they may trade a higher level for a lower one.
 NOT_REFERENCE = ("pink", "weighted")
-
-
-def percentile(values: Sequence[float], q: float) -> float:
-    """The ``q``-th percentile of ``values`` (NaN when empty)."""
-    return float(np.percentile(values, q)) if len(values) else math.nan
 
 
 def shifted_geometric_mean(values: Sequence[float], shift: float = SGM_SHIFT_US) -> float:

@@ -36,7 +36,21 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
+from ..constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
+from ..controller import Controller
+from ..model import load_model
 from ..rows import Rows
+from ..stack import Level, Stack
+from ..tasks import (
+    CurrentAlignmentTask,
+    EndEffectorTask,
+    JointLimitTask,
+    PostureTask,
+    StationKeepingTask,
+    VehicleMotionTask,
+)
+from .sets import _singular_configuration
+from .stacks import demo_stack
 
 #: Plain-matrix families, in the order of the issue's table.
 MATRIX_FAMILIES: tuple[str, ...] = ("well", "repeated", "zero_row", "near_singular",
@@ -298,18 +312,6 @@ def family(name: str, count: int, seed: int = 0, models: dict[str, Any] | None =
 
 # ---------------------------------------------------------------------------- controller
 def _controller_stack(name: str, target: list[float]) -> Any:
-    from ..constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
-    from ..stack import Level, Stack
-    from ..tasks import (
-        CurrentAlignmentTask,
-        EndEffectorTask,
-        JointLimitTask,
-        PostureTask,
-        StationKeepingTask,
-        VehicleMotionTask,
-    )
-    from .stacks import demo_stack
-
     bounds = [JointPositionBounds(gain=0.5), JointVelocityBounds(),
               VehicleRateBounds(linear=0.5, angular=0.3)]
     if name == "shared_yaw":
@@ -337,17 +339,12 @@ def controller_problem(name: str, seed: int, models: dict[str, Any] | None = Non
     the vehicle to 89.99 deg. Rows and box come from today's
     :class:`~uvms_qp.controller.Controller` (``level_rows`` and ``bounds``).
     """
-    from ..controller import Controller
-    from ..model import load_model
-
     cache = models if models is not None else {}
     model = cache.get("bluerov2_heavy_alpha5")
     if model is None:
         model = cache["bluerov2_heavy_alpha5"] = load_model("bluerov2_heavy_alpha5")
     rng = np.random.default_rng([seed, CONTROLLER_FAMILIES.index(name), 0xB10E])
     if name == "singular":
-        from .sets import _singular_configuration
-
         q = _singular_configuration(model, rng)
         eta, joints = model.split(q)
         eta[4] = math.radians(89.99)

@@ -8,8 +8,11 @@ and each failure carries its reason.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
+
+import numpy as np
 
 #: Hard-row tolerance a result must meet to count as a success (whatever the back-end says).
 HARD_TOL = 1e-7
@@ -100,8 +103,6 @@ class Record:
 
     def to_row(self) -> dict[str, str]:
         """One CSV row (see :data:`CSV_COLUMNS`); lists are space-separated."""
-        from .metrics import percentile
-
         t = self.times_us
         return {
             "set": self.set, "problem": self.problem, "solver": self.solver,
@@ -138,3 +139,8 @@ class Record:
             backend_us=float(row.get("backend_us") or "nan"),
             note=row.get("note") or "",
         )
+
+
+def percentile(values: Sequence[float], q: float) -> float:
+    """The ``q``-th percentile of ``values`` (NaN when empty)."""
+    return float(np.percentile(values, q)) if len(values) else math.nan

@@ -43,8 +43,13 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
+from ..controller import Controller
 from ..errors import InputError
-from ..hqp import hard_violation
+from ..hqp import HierarchySolver, available_solvers, hard_violation
+from ..rows import Rows
+from ..schemes import SCHEME_TYPES, build_scheme
+from ..sim.runner import simulate
+from ..sim.scenario import load_scenario
 from .pink_adapter import PinkController, pink_available, pink_supported, position_gain, rate_box
 from .record import HARD_TOL, Record
 from .sets import BenchProblem
@@ -186,9 +191,6 @@ class Runner:
         raise NotImplementedError
 
     def _run_scenario(self, problem: BenchProblem, record: Record) -> None:
-        from ..sim.runner import simulate
-        from ..sim.scenario import load_scenario
-
         scenario = load_scenario(str(problem.scenario))
         stack = scenario.build_stack()
         controller = self._scenario_controller(scenario, stack)
@@ -319,8 +321,6 @@ def _box_violation(problem: BenchProblem, x: FloatArray) -> float:
 
 
 def _raw_reference_rows(problem: BenchProblem) -> list[Any]:
-    from ..rows import Rows
-
     out = []
     for level in problem.levels or []:
         A = np.vstack([t[0] for t in level])
@@ -332,8 +332,6 @@ def _raw_reference_rows(problem: BenchProblem) -> list[Any]:
 
 def _reference_rows(problem: BenchProblem) -> list[Any]:
     """Rows of every level of a UVMS problem, from an independent build of its stack."""
-    from ..controller import Controller
-
     assert problem.build is not None
     draw = problem.build()
     ref = Controller(draw.model, draw.stack, solver="daqp", dt=draw.dt)
@@ -355,13 +353,9 @@ class HqpRunner(Runner):
         return scenario.make_controller(self.solver, stack=stack)
 
     def _uvms_controller(self, draw: Any) -> Any:
-        from ..controller import Controller
-
         return Controller(draw.model, draw.stack, solver=self.solver, dt=draw.dt)
 
     def _raw_solver(self, problem: BenchProblem) -> Any:
-        from ..hqp import HierarchySolver
-
         return HierarchySolver(self.solver)
 
 
@@ -379,27 +373,19 @@ class NullspaceRunner(Runner):
             return None if problem.all_equality else "inequality levels"
         if problem.kind == "uvms":
             return None if _all_equality_rows(_reference_rows(problem)) else "inequality tasks"
-        from ..sim.scenario import load_scenario
-
         scenario = load_scenario(str(problem.scenario))
         ctl = scenario.make_controller()
         rows = ctl.level_rows(scenario.model.state(scenario.q0), 0.0)
         return None if _all_equality_rows(rows) else "inequality tasks"
 
     def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
-        from ..controller import Controller
-
         return Controller(scenario.model, stack, dt=scenario.dt, metric=scenario.metric,
                           scheme="nullspace")
 
     def _uvms_controller(self, draw: Any) -> Any:
-        from ..controller import Controller
-
         return Controller(draw.model, draw.stack, dt=draw.dt, scheme="nullspace")
 
     def _raw_solver(self, problem: BenchProblem) -> Any:
-        from ..hqp import HierarchySolver
-
         return HierarchySolver("nullspace")
 
 
@@ -409,26 +395,18 @@ class WeightedRunner(Runner):
     name = "weighted"
 
     def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
-        from ..controller import Controller
-
         return Controller(scenario.model, stack, solver=WEIGHTED_BACKEND,
                           dt=scenario.dt, metric=scenario.metric, scheme="weighted",
                           priority_ratio=PRIORITY_RATIO)
 
     def _uvms_controller(self, draw: Any) -> Any:
-        from ..controller import Controller
-
         return Controller(draw.model, draw.stack, solver=WEIGHTED_BACKEND, dt=draw.dt,
                           scheme="weighted", priority_ratio=PRIORITY_RATIO)
 
     def _raw_solver(self, problem: BenchProblem) -> Any:
-        from ..hqp import HierarchySolver
-
         return HierarchySolver(WEIGHTED_BACKEND)
 
     def _raw_inputs(self, problem: BenchProblem) -> tuple[list[Any], Any, Any]:
-        from ..rows import Rows
-
         rows = _raw_reference_rows(problem)
         p = len(rows)
         merged = Rows(np.vstack([r.A for r in rows]),
@@ -453,16 +431,12 @@ class SchemeRunner(Runner):
         reason = super().applies(problem)
         if reason is not None:
             return reason
-        from ..sim.scenario import load_scenario
-
         scenario = load_scenario(str(problem.scenario))
         if self.scheme not in scenario.schemes:
             return f"scenario does not name {self.scheme}"
         return None
 
     def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
-        from ..schemes import build_scheme
-
         return build_scheme(self.scheme, scenario, stack=stack)
 
 
@@ -482,8 +456,6 @@ class PinkRunner(Runner):
             return reason
         if problem.kind == "uvms":
             return None if problem.info.get("pink") else "stack has strict priorities"
-        from ..sim.scenario import load_scenario
-
         scenario = load_scenario(str(problem.scenario))
         task, trajectory = _tracking(scenario, scenario.build_stack())
         if task is None or trajectory is None:
@@ -528,9 +500,6 @@ EXTRA_RUNNERS: dict[str, Callable[[], Runner]] = {}
 
 def runner_names() -> tuple[list[str], list[str]]:
     """Every runner available here, in table order, and notes on the missing ones."""
-    from ..hqp import available_solvers
-    from ..schemes import SCHEME_TYPES
-
     solvers = available_solvers()
     names = [s for s in solvers if s != "nullspace"]
     names += ["nullspace", "weighted"] if "nullspace" in solvers else ["weighted"]

@@ -27,6 +27,11 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..errors import InputError
+from ..model import Model, bundled_models, load_model
+from ..model.vehicle import Vehicle
+from ..sim.scenario import bundled_scenarios
+from ..tasks import EndEffectorTask
+from .stacks import random_bounds, random_stack, random_target, tool_posture_stack
 
 #: Names of the test sets, in run order.
 SET_NAMES: tuple[str, ...] = ("scenarios", "random", "raw")
@@ -119,8 +124,6 @@ class SetConfig:
 
 def scenario_set(config: SetConfig) -> list[BenchProblem]:
     """Every bundled scenario (or ``config.scenarios``), closed loop, capped at ``max_steps``."""
-    from ..sim.scenario import bundled_scenarios
-
     names = list(config.scenarios) if config.scenarios is not None else bundled_scenarios()
     known = set(bundled_scenarios())
     for name in names:
@@ -191,9 +194,6 @@ def random_dh_model(rng: np.random.Generator, name: str) -> Any:
     ``+/-`` 1-3 rad, joint rate limits 0.5-2 rad/s. Spatial vehicles actuate all six DOFs or
     the 4-DOF ROV set ``u, v, w, r``.
     """
-    from ..model import Model
-    from ..model.vehicle import Vehicle
-
     planar = bool(rng.uniform() < 0.35)
     n_joints = int(rng.integers(3, 8))
     rows = []
@@ -257,10 +257,6 @@ def random_uvms_problem(seed: int, models: dict[str, Any] | None = None) -> Uvms
         vehicle rate bounds tight enough to be active
         (:func:`~uvms_qp.bench.stacks.random_bounds`).
     """
-    from ..model import bundled_models, load_model
-    from ..tasks import EndEffectorTask
-    from .stacks import random_bounds, random_stack, random_target, tool_posture_stack
-
     rng = np.random.default_rng([seed, 0x55])
     cache = models if models is not None else {}
     notes: list[str] = []

@@ -124,8 +124,8 @@ def random_stack(model: Any, state: Any, rng: np.random.Generator,
     The tool task (position, or pose on spatial vehicles 40 % of the time) tracks a target about
     0.3 m from the tool. The other tasks, shuffled, fill the remaining levels one each, and the
     tasks left over join random levels (the first one included): a manipulability floor (around
-    the current ``w``) or ascent; a joint-limit gradient (``003_229789978cc4b235.txt,
-    Eq. (15)-(16)``, saturated at the limits) or margin, when every joint has finite limits; a
+    the current ``w``) or ascent; a joint-limit gradient (Wang et al. (2017),
+    Eq. (15)-(16), saturated at the limits) or margin, when every joint has finite limits; a
     payload moment bound or reduction; with a vehicle, station keeping, current alignment (yaw
     actuated), vehicle attitude (roll and pitch actuated) and motion distribution; a posture
     task. A random general inequality over zeta joins ``constraints`` 40 % of the time.

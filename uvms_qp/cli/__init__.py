@@ -15,6 +15,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
+from .. import __version__
 from ..errors import UvmsQpError
 
 
@@ -32,8 +33,6 @@ def build_parser() -> argparse.ArgumentParser:
         prog="uvms-qp",
         description="Task-priority kinematic control for underwater vehicle-manipulator systems.",
     )
-    from .. import __version__
-
     parser.add_argument("--version", action="version", version=f"uvms-qp {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):

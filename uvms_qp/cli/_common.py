@@ -1,12 +1,15 @@
-"""Argument set-up shared by the sub-commands: plain help texts, model files, the output folder."""
+"""Shared by the sub-commands: plain help texts, tables, model files, the output folder."""
 
 from __future__ import annotations
 
 import argparse
 import os
 import re
+import shutil
+import sys
 import tempfile
-from collections.abc import Callable, Iterator
+import textwrap
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -21,6 +24,27 @@ def plain(doc: str | None) -> str:
     text = _ROLE.sub(r"\1", doc or "")
     text = text.replace("``", "")
     return re.sub(r"::$", ":", text, flags=re.MULTILINE)
+
+
+def print_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+    """Print left-aligned columns, one row per line.
+
+    On a terminal the last column wraps onto indented lines to fit the terminal's width (at least
+    20 characters of it per line); in a pipe or a file every row stays on one line.
+    """
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers[:-1])]
+    indent = sum(widths) + 2 * len(widths)
+    room = None
+    if sys.stdout.isatty():
+        room = max(20, shutil.get_terminal_size().columns - 1 - indent)
+    for row in (headers, *rows):
+        cells = "".join(cell.ljust(w + 2) for cell, w in zip(row[:-1], widths, strict=True))
+        lines = [row[-1]]
+        if room:
+            lines = textwrap.wrap(row[-1], room, break_on_hyphens=False) or [""]
+        print(f"{cells}{lines[0]}".rstrip())
+        for line in lines[1:]:
+            print(" " * indent + line)
 
 
 def add_model_path(parser: argparse.ArgumentParser) -> None:

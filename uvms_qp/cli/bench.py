@@ -25,6 +25,7 @@ import sys
 import time
 from typing import Any
 
+from ..errors import InputError
 from ._common import plain
 
 #: Longest silence of the progress lines printed when standard error is not a terminal [s].
@@ -97,7 +98,6 @@ def run(args: argparse.Namespace) -> int:
 
     from ..bench import SetConfig, run_benchmark
     from ..bench.report import TERMINAL_WIDTH, markdown_table, plot, print_table
-    from ..errors import InputError
 
     config = SetConfig.quick() if args.quick else SetConfig()
     for option, attr in (("max_steps", "max_steps"), ("random_count", "random_count"),

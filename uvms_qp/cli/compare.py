@@ -6,8 +6,8 @@ scheme, ``DIR/comparison.md`` and ``DIR/comparison.json`` (the side-by-side metr
 PNG figures with the schemes overlaid, and prints the table. A run that breaks the scenario's
 hard bounds is marked ``(exceeded)`` in the table and named in a warning: the closed-form schemes
 ignore the bounds, although each of their steps reports status ``optimal``. An invalid scenario,
-an unknown scheme or an unusable ``--out`` (checked before anything runs) exits with status 2 and
-a one-line message.
+an unknown scheme, a ``--duration`` out of the scenario's limits or an unusable ``--out`` (checked
+before anything runs) exits with status 2 and a one-line message.
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ def _options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--schemes", help="comma-separated subset of the scenario's schemes (default: all)"
     )
+    parser.add_argument("--duration", type=float,
+                        help="override the simulated time [s] (at least one control period)")
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -58,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
 
     register_model_paths(args)
     scenario = load_scenario(args.scenario)
+    if args.duration is not None:
+        scenario = scenario.with_duration(args.duration, "--duration")
     subset = None
     if args.schemes:
         subset = [name.strip() for name in args.schemes.split(",") if name.strip()]

@@ -1,9 +1,10 @@
 """``uvms-qp models [NAME]``: list the models with their DOFs, or describe one.
 
-Without a name, one line per model: name, size of ``zeta`` (vehicle + joints), vehicle kind with
-its actuated rates, and what the model is. The list holds the bundled models, the models of the
-``--model-path`` files and those that installed packages declare (``uvms_qp.models`` entry
-points). With a name: source, frames, mount, joint limits and rate limits.
+Without a name, a row per model: name, size of ``zeta`` (vehicle + joints), vehicle kind with
+its actuated rates, and what the model is (wrapped to the width of a terminal). The list holds
+the bundled models, the models of the ``--model-path`` files and those that installed packages
+declare (``uvms_qp.models`` entry points). With a name: source, frames, mount, joint limits
+and rate limits.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ._common import add_model_path, plain, register_model_paths
+from ._common import add_model_path, plain, print_table, register_model_paths
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -83,8 +84,5 @@ def run(args: argparse.Namespace) -> int:
         if entry.origin != "bundled":
             summary = f"{summary} ({entry.origin})"
         rows.append((name, dofs, _vehicle(model), summary.strip()))
-    headers = ("model", "DOF (vehicle + joints)", "vehicle", "description")
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers)]
-    for row in (headers, *rows):
-        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
+    print_table(("model", "DOF (veh + arm)", "vehicle", "description"), rows)
     return 0

@@ -54,12 +54,17 @@ def _summary(metrics: dict[str, Any]) -> str:
         ("step_time_median_us", "us"),
         ("step_time_p99_us", "us"),
         ("nan_steps", ""),
+        ("stage_counts", ""),
+        ("status_counts", ""),
     )
     lines = []
     for key, unit in keys:
         if key in metrics and metrics[key] is not None:
             value = metrics[key]
-            text = f"{value:.4g}" if isinstance(value, float) else str(value)
+            if isinstance(value, dict):  # counts per stage or status
+                text = ", ".join(f"{name} {count}" for name, count in value.items())
+            else:
+                text = f"{value:.4g}" if isinstance(value, float) else str(value)
             if key == "command_reversals_per_s_max":
                 text += f" ({metrics.get('command_reversals_worst_axis')})"
             lines.append(f"  {key:<28} {text} {unit}".rstrip())

@@ -1,7 +1,8 @@
-"""``uvms-qp scenarios``: list the bundled scenarios, one line each, with their description.
+"""``uvms-qp scenarios``: list the bundled scenarios with their model and description.
 
 Each name runs with ``uvms-qp run NAME --out DIR`` (and ``uvms-qp compare NAME --out DIR`` for
-the schemes it names). The files are read, not run: the list is quick.
+the schemes it names). The files are read, not run: the list is quick. On a terminal a long
+description wraps to the terminal's width; in a pipe each scenario is one line.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ._common import plain
+from ._common import plain, print_table
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -25,7 +26,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print one line per bundled scenario: name, model and description."""
+    """Print a row per bundled scenario: name, model and description."""
     from ..sim.config import read_toml
     from ..sim.scenario import bundled_scenarios, resolve_scenario
 
@@ -35,9 +36,5 @@ def run(args: argparse.Namespace) -> int:
         model = data.get("model")
         model_text = model if isinstance(model, str) else "[model] table"
         rows.append((name, str(model_text), str(data.get("description", "")).strip()))
-    headers = ("scenario", "model", "description")
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers[:-1])]
-    for row in (headers, *rows):
-        cells = [cell.ljust(w) for cell, w in zip(row[:-1], widths, strict=True)]
-        print("  ".join([*cells, row[-1]]).rstrip())
+    print_table(("scenario", "model", "description"), rows)
     return 0

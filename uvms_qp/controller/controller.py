@@ -115,10 +115,11 @@ class Controller:
         that produced zeta.
 
         Raises:
-            InputError: a task whose target was never set, a state of another model, or
-                something other than a State (e.g. a configuration array; use ``model.state(q)``).
-            NonFiniteError: a task produced NaN/inf rows (the message names the task); bad input
-                never reaches a back-end.
+            InputError: a task whose target was never set, a state of another model,
+                something other than a State (e.g. a configuration array; use
+                ``model.state(q)``), or a time ``t`` that is not a real number.
+            NonFiniteError: a task produced NaN/inf rows (the message names the task), or ``t``
+                is NaN or inf; bad input never reaches a back-end.
             BoundsError: the hard box is empty (the message names the constraints involved): no
                 command can satisfy it.
             NoSolutionFound: strict mode, and no back-end returned a verified solution.

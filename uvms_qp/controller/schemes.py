@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
+from .._validation import as_time
 from ..errors import InputError, NoSolutionFound
 from ..hqp import Problem, Status
 from ..hqp.damping import Damping, level_damping
@@ -101,12 +102,15 @@ class _StackScheme:
         """Fill the problem, solve it through the ladder, measure the command.
 
         Raises:
-            InputError: a task whose target was never set, a state of another model, or
-                something other than a State (e.g. a configuration array).
-            NonFiniteError: a task produced NaN/inf rows (the message names the task).
+            InputError: a task whose target was never set, a state of another model, something
+                other than a State (e.g. a configuration array), or a time that is not a real
+                number.
+            NonFiniteError: a task produced NaN/inf rows (the message names the task), or the
+                time is NaN or inf.
             BoundsError: the hard box is empty (the message names the constraints).
             NoSolutionFound: strict mode, and no back-end returned a verified solution.
         """
+        t = as_time(t)
         clock = self.safe.clock
         start = clock()
         assembler = self.assembler

@@ -22,7 +22,7 @@ from .measure import Certifier, clip_to_box, evaluate
 from .problem import Problem
 from .registry import SolverSpec, available_solvers, get_spec
 from .result import OK_STATUSES, HierarchyResult
-from .validate import Validator
+from .validate import Validator, check_magnitude
 
 
 def make_backend(spec: SolverSpec, options: dict[str, Any]) -> Backend:
@@ -115,6 +115,7 @@ class HierarchySolver:
         W = self._metric
         if W is None or W.shape[0] != n or src != self._metric_src:
             W = as_vector(raw, "weights", n, positive=True).copy()  # never the caller's array
+            check_magnitude(W, "weights", weights=True)
             self._metric, self._metric_src = W, src
         return W
 

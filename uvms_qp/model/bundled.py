@@ -20,10 +20,10 @@ from .model import Model
 from .transforms import flu_to_frd, transform
 from .vehicle import Vehicle
 
-PAPER_000 = "000_7b5f597fe4e36aa4.txt"
-PAPER_001 = "001_0fa6eac0390842e0.txt"
-PAPER_002 = "002_1230892968c9c95c.txt"
-PAPER_003 = "003_229789978cc4b235.txt"
+PAPER_000 = "Soylu et al. (2007)"
+PAPER_001 = "dos Santos et al. (2006)"
+PAPER_002 = "Nenchev and Tsumaki"
+PAPER_003 = "Wang et al. (2017)"
 
 #: Published mount of the Reach Alpha 5 base on the BlueROV2 Heavy body, ROS FLU body axes:
 #: ``xyz`` [m], ``rpy`` [rad].
@@ -54,7 +54,7 @@ def _planar_arm(
 def soylu_planar() -> Model:
     """ROPOS planar UVMS: vehicle (x, y, psi), arm base r = 1 m ahead, three 1 m links.
 
-    ``000_7b5f597fe4e36aa4.txt``, Section 3; home q = [pi/3, -pi/3, pi/3] puts the tool at
+    Soylu et al. (2007), Section 3; home q = [pi/3, -pi/3, pi/3] puts the tool at
     (3, 1.7321) m.
     """
     third = math.pi / 3
@@ -64,7 +64,7 @@ def soylu_planar() -> Model:
 def santos_planar() -> Model:
     """Planar UVMS of dos Santos et al.: arm base 2.5 m ahead, three 2 m links.
 
-    ``001_0fa6eac0390842e0.txt``, Simulation Results; home q = [1.47, -1, 0.3] rad puts the
+    dos Santos et al. (2006), Simulation Results; home q = [1.47, -1, 0.3] rad puts the
     tool at (5.92, 4.29) m with heading 0.77 rad.
     """
     return _planar_arm(
@@ -75,7 +75,7 @@ def santos_planar() -> Model:
 def wang_9dof() -> Model:
     """9-DOF UVMS of Wang et al.: 4 actuated vehicle rates (u, v, w, r) + 5-joint arm.
 
-    ``003_229789978cc4b235.txt``, Table 1 (modified D-H, row 6 is the fixed tool link) and
+    Wang et al. (2017), Table 1 (modified D-H, row 6 is the fixed tool link) and
     Simulation setup (joint limits, home q = [0, -45, 90, 45, 0] deg). Roll and pitch are
     passive. The arm base is mounted at :data:`WANG_MOUNT` (our choice).
     """
@@ -105,7 +105,7 @@ def wang_9dof() -> Model:
 def nenchev_pa10_arm() -> Model:
     """4-DOF positioning arm of a PA-10-like arm (d3 = d5 = 1 m) on a fixed base.
 
-    ``002_1230892968c9c95c.txt``, Section 3: standard D-H with twists (90, -90, 90, -90) deg,
+    Nenchev and Tsumaki, Section 3: standard D-H with twists (90, -90, 90, -90) deg,
     ``d3 = 1`` m on row 3 and the wrist centre ``d5 = 1`` m along ``z4`` (the tool). This table
     reproduces the paper's Jacobian entries ``j11 .. j34`` and the wrist centre (1, 0, 1) m at
     (0, 0, 0, -90) deg. The world frame is the paper's base frame (z along joint 1).
@@ -177,11 +177,19 @@ class BundledModel:
 _REGISTRY: dict[str, BundledModel] = {
     entry.name: entry
     for entry in (
-        BundledModel("soylu_planar", soylu_planar, "ROPOS planar UVMS, 3 x 1 m links (000)"),
-        BundledModel("santos_planar", santos_planar, "planar UVMS, 3 x 2 m links (001)"),
-        BundledModel("wang_9dof", wang_9dof, "4-DOF vehicle, passive roll/pitch, 5-DOF arm (003)"),
         BundledModel(
-            "nenchev_pa10_arm", nenchev_pa10_arm, "PA-10 4-DOF positioning arm, fixed (002)"
+            "soylu_planar", soylu_planar, "ROPOS planar UVMS, 3 x 1 m links (Soylu et al. 2007)"
+        ),
+        BundledModel(
+            "santos_planar", santos_planar, "planar UVMS, 3 x 2 m links (dos Santos et al. 2006)"
+        ),
+        BundledModel(
+            "wang_9dof", wang_9dof,
+            "4-DOF vehicle, passive roll/pitch, 5-DOF arm (Wang et al. 2017)",
+        ),
+        BundledModel(
+            "nenchev_pa10_arm", nenchev_pa10_arm,
+            "PA-10 4-DOF positioning arm, fixed base (Nenchev and Tsumaki)",
         ),
         BundledModel(
             "bluerov2_heavy_alpha5",

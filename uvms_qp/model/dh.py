@@ -6,7 +6,7 @@ Two conventions are supported; row ``i`` (1-based) of a table describes link ``i
   joint ``i`` moves about (revolute) or along (prismatic) ``z_{i-1}``.
 - ``"modified"`` (proximal, Craig): ``T_{i-1,i} = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i + q_i)
   Tz(d_i)``; joint ``i`` moves about ``z_i``. A row's ``a`` and ``alpha`` are then the Craig
-  ``a_{i-1}`` and ``alpha_{i-1}`` (as printed in ``003_229789978cc4b235.txt``, Table 1).
+  ``a_{i-1}`` and ``alpha_{i-1}`` (as printed in Wang et al. (2017), Table 1).
 
 For a prismatic joint ``q_i`` is added to ``d_i`` instead of ``theta_i``. A ``"fixed"`` row is a
 constant link transform (for example the tool row 6 of that table).

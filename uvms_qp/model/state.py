@@ -125,7 +125,7 @@ class State:
     def vehicle_pose_jacobian(self) -> FloatArray:
         """Matrix ``J_eta`` with ``eta_dot = J_eta @ zeta`` (passive rates taken as zero).
 
-        Spatial: Fossen's transformation (``003_229789978cc4b235.txt``, Eq. (2)-(3),
+        Spatial: Fossen's transformation (Wang et al. (2017), Eq. (2)-(3),
         :meth:`~uvms_qp.model.vehicle.Vehicle.pose_jacobian_entries`, with the rotation of the
         configuration's quaternion) restricted to the actuated columns; planar
         ``[R2(psi), 0; 0, 1]``; joint columns are zero. Computed once per state.
@@ -248,7 +248,7 @@ class State:
 
         The vehicle is held still: ``[v; omega]_arm_base = J_arm @ joint_rates``, with ``v`` the
         velocity of the frame origin. Used for the arm's manipulability
-        (``000_7b5f597fe4e36aa4.txt``, Eq. (18); ``003_229789978cc4b235.txt``, Eq. (18)).
+        (Soylu et al. (2007), Eq. (18); Wang et al. (2017), Eq. (18)).
         A frame the arm does not move has a zero Jacobian.
 
         Args:
@@ -279,7 +279,7 @@ class State:
 
         ``R_wb^T (p_frame - p_arm_base)`` (up to rounding), read from the bare arm's kinematics
         that :meth:`arm_jacobian` uses; e.g. the payload lever arm
-        (``003_229789978cc4b235.txt``, Eq. (20)).
+        (Wang et al. (2017), Eq. (20)).
         """
         try:
             p = self._arm_positions.get(frame)

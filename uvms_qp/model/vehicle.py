@@ -62,7 +62,7 @@ class Vehicle:
 
     Example:
         ``Vehicle("spatial", actuated=("u", "v", "w", "r"))`` is a 4-DOF ROV with passive roll and
-        pitch (paper ``003_229789978cc4b235.txt``, Section "Simulation setup").
+        pitch (Wang et al. (2017), Section "Simulation setup").
     """
 
     kind: VehicleKind = "spatial"
@@ -179,7 +179,7 @@ class Vehicle:
                               ) -> list[float]:
         """The entries of :attr:`pose_jacobian_pattern` at ``eta`` [m, rad] (plain floats).
 
-        Spatial (Fossen; ``003_229789978cc4b235.txt``, Eq. (2)-(3)):
+        Spatial (Fossen; Wang et al. (2017), Eq. (2)-(3)):
         ``J = blkdiag(R(Theta), T(Theta))`` with ``R = Rz(psi) Ry(theta) Rx(phi)`` given as
         ``rotation`` (9 row-major floats) and ``T = [[1, s(phi) t(theta), c(phi) t(theta)],
         [0, c(phi), -s(phi)], [0, s(phi)/c(theta), c(phi)/c(theta)]]`` (singular at

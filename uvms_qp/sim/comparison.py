@@ -26,17 +26,17 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .._validation import FloatArray
 from ..errors import ConfigError
+from ..schemes import build_scheme
 from ._files import write_atomic
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .runner import SimulationResult
-    from .scenario import Scenario
+from .results import write_results
+from .runner import SimulationResult, simulate
+from .scenario import Scenario, load_scenario
 
 #: Unit of a table metric whose value is a dict by unit (one row per unit).
 BY_UNIT = "by unit"
@@ -64,6 +64,8 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("settling_time", "s"),
     ("step_time_median_us", "us"),
     ("nan_steps", ""),
+    ("stage_counts", "steps"),
+    ("status_counts", "steps"),
 )
 
 #: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).
@@ -223,8 +225,6 @@ class Comparison:
         Every file is written atomically (mode 0644); a path there that is a symbolic link is
         replaced, not followed.
         """
-        from .results import write_results
-
         directory = Path(out_dir)
         directory.mkdir(parents=True, exist_ok=True)
         written = []
@@ -257,9 +257,11 @@ class Comparison:
 
 
 def format_value(value: Any) -> str:
-    """Compact text of a metric value for tables."""
+    """Compact text of a metric value for tables (counts: ``primary 598, alternate 2``)."""
     if value is None:
         return "-"
+    if isinstance(value, dict):
+        return ", ".join(f"{key} {format_value(count)}" for key, count in value.items())
     if isinstance(value, bool | int | np.integer):
         return str(int(value))
     if isinstance(value, float | np.floating):
@@ -333,10 +335,6 @@ def compare(
     Raises:
         ConfigError: invalid scenario, or a scheme name that is unknown or not in the scenario.
     """
-    from ..schemes import build_scheme
-    from .runner import simulate
-    from .scenario import Scenario, load_scenario
-
     base = source if isinstance(source, Scenario) else load_scenario(source)
     names = list(base.schemes)
     if schemes is not None:

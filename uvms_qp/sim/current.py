@@ -3,7 +3,7 @@
 The kinematic simulation has no hydrodynamics. The current plays two roles:
 
 - it gives a heading ``psi_c`` [rad] (world NED, measured from north toward east) that a
-  current-alignment task turns the vehicle toward (``001_0fa6eac0390842e0.txt``, Eq. (23)-(26)
+  current-alignment task turns the vehicle toward (dos Santos et al. (2006), Eq. (23)-(26)
   and its simulation: vehicle kept at rest with its yaw aligned to a current at 0.78 rad);
 - optionally, it drifts the vehicle: a fraction ``drift`` of the current velocity
   ``v_c = speed [cos psi_c, sin psi_c, 0]`` [m/s] is added to the vehicle's world position rate,

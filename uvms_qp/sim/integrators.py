@@ -4,7 +4,7 @@ The controller's command ``zeta = [actuated vehicle body rates; joint rates]`` (
 over one control period ``dt`` [s] (zero-order hold, as on a real vehicle) and integrated with
 ``model.integrate(q, zeta, dt)``: the exponential map of the vehicle's body twist on SE(3) (or
 SE(2)) and a sum for the joints. With the command held, that update is exact; it is the explicit
-Euler scheme of the papers (``000_7b5f597fe4e36aa4.txt``, Section 3; ``001_0fa6eac0390842e0.txt``,
+Euler scheme of the papers (Soylu et al. (2007), Section 3; dos Santos et al. (2006),
 Euler step 0.1 s) applied to the closed loop.
 
 ``method="rk4"`` integrates the closed loop as a continuous-time system instead: the rates are

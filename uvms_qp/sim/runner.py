@@ -29,6 +29,7 @@ from ..constraints import CommandRateBounds, intersect_boxes
 from ..hqp import hard_violation
 from ..safety import STAGES
 from ..stack import Stack
+from . import metrics as run_metrics
 from .probes import Probes
 from .units import joint_units, zeta_units
 
@@ -163,9 +164,7 @@ class SimulationResult:
         order, stages that occurred only), ``deadline_missed_steps`` and ``clipped_max``
         [m/s, rad/s] (largest amount the final saturation removed from a command).
         """
-        from .metrics import compute_metrics
-
-        metrics = compute_metrics(self)
+        metrics = run_metrics.compute_metrics(self)
         metrics.update(self.fallback_metrics())
         return metrics
 
@@ -186,9 +185,7 @@ class SimulationResult:
 
     def phase_metrics(self) -> dict[str, dict[str, Any]]:
         """Metrics of every scenario phase, by phase name."""
-        from .metrics import phase_metrics
-
-        return {name: phase_metrics(self, a, b) for name, (a, b) in self.phases.items()}
+        return {name: run_metrics.phase_metrics(self, a, b) for name, (a, b) in self.phases.items()}
 
 
 def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: FloatArray,

@@ -4,7 +4,7 @@ Every trajectory implements :meth:`Trajectory.sample` and returns a :class:`Traj
 the position ``p(t)`` [m] and velocity ``p_dot(t)`` [m/s] in the world frame, and, when an
 orientation is prescribed, the rotation ``R(t) = R_world_frame`` and the angular velocity
 ``omega(t)`` [rad/s] in world axes. Tasks consume them as targets with feed-forward terms
-(closed-loop inverse kinematics, ``000_7b5f597fe4e36aa4.txt, Eq. (16)``).
+(closed-loop inverse kinematics, Soylu et al. (2007), Eq. (16)).
 
 Time is clamped: before ``start_time`` a trajectory holds its first sample, after
 ``start_time + duration`` its last one, both with zero velocity. Planar scenarios use the same

@@ -22,7 +22,10 @@ and results are measured, never trusted, in :mod:`uvms_qp.hqp.measure`.
 from __future__ import annotations
 
 import ctypes
+import difflib
+import inspect
 import os
+import re
 import sys
 import warnings
 from functools import cache
@@ -30,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from ..._validation import FloatArray
+from ..._validation import FloatArray, as_scalar
+from ...errors import InputError
 from ..hard_set import hard_feasible, hard_point, polish_hard
 from ..kkt import active_set_from, certified_point
 from ..measure import hard_violation
@@ -38,6 +42,7 @@ from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
 from . import Answer
+from .daqp import DAQP_SETTINGS
 
 
 @cache
@@ -137,10 +142,17 @@ class CascadeBackend:
         opts = dict(options or {})
         self._qpsolvers = qpsolvers
         self.spec = spec
-        self.rank_tol = float(opts.pop("rank_tol", 1e-10))
-        self.reg = float(opts.pop("reg", spec.reg))
-        self.prox_steps = int(opts.pop("prox_steps", spec.prox_steps))
-        self.mult_tol = float(opts.pop("mult_tol", 1e-7))
+        self.rank_tol = as_scalar(opts.pop("rank_tol", 1e-10), "options['rank_tol']",
+                                  nonnegative=True)
+        self.reg = as_scalar(opts.pop("reg", spec.reg), "options['reg']", nonnegative=True)
+        steps = opts.pop("prox_steps", spec.prox_steps)
+        if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
+            raise InputError(f"options['prox_steps']: expected a non-negative integer, "
+                             f"got {steps!r}")
+        self.prox_steps = int(steps)
+        self.mult_tol = as_scalar(opts.pop("mult_tol", 1e-7), "options['mult_tol']",
+                                  positive=True)
+        _check_settings(spec, opts)
         #: QPs answered by the exact active-set rescue since construction (diagnostics)
         self.rescued = 0
         self._stopped = False  # a QP raised TimeoutError in this solve (deadline guard)
@@ -183,9 +195,11 @@ class CascadeBackend:
             return None, none
         self._capped = not sol.found and _hit_iteration_cap(sol)
         z = sol.x
-        if z is None or not np.all(np.isfinite(z)):
+        if z is None:
             return None, none
         z = np.asarray(z, dtype=np.float64)
+        if z.shape != q.shape or not np.all(np.isfinite(z)):  # HiGHS may return an empty x
+            return None, none
         rescue = not sol.found and not _closest_feasible_is_optimal(sol, G, h, z)
         if rescue and self.spec.exact:
             return None, none
@@ -441,6 +455,81 @@ def _finite_abs(v: FloatArray) -> FloatArray:
     ``np.nan_to_num``'s dozen.
     """
     return np.abs(np.where(np.isfinite(v), v, 0.0))
+
+
+_OWN_OPTIONS = ("rank_tol", "reg", "prox_steps", "mult_tol", "level_tol", "hard_tol")
+
+
+@cache
+def backend_settings(qp_name: str) -> frozenset[str] | None:
+    """Names of the settings qpsolvers passes on to the back-end ``qp_name``.
+
+    Read from the installed back-end itself (its settings object or its solve function's
+    signature), so a setting it does not know is refused here instead of being ignored or
+    making every QP fail. None when the back-end offers no way to list them (not checked).
+    """
+    names: set[str] = {"verbose"}
+    try:
+        if qp_name == "quadprog":
+            import quadprog
+
+            names |= set(inspect.signature(quadprog.solve_qp).parameters) - {
+                "G", "a", "C", "b", "meq"}
+        elif qp_name == "daqp":
+            names |= DAQP_SETTINGS
+        elif qp_name == "proxqp":
+            import proxsuite
+
+            doc = (proxsuite.proxqp.dense.solve.__doc__ or "").splitlines()
+            found = set(re.findall(r"(\w+):", doc[0])) if doc else set()
+            if not found:
+                return None
+            names |= found - {"H", "g", "A", "b", "C", "l", "u", "x", "y", "z"}
+            names.add("backend")
+        elif qp_name == "piqp":
+            import piqp
+
+            names |= _public(piqp.DenseSolver().settings) | {"backend"}
+        elif qp_name == "clarabel":
+            import clarabel
+
+            names |= _public(clarabel.DefaultSettings())
+        elif qp_name == "highs":
+            import highspy
+
+            names |= _public(highspy.HighsOptions())
+        elif qp_name == "osqp":
+            import osqp
+
+            names |= _public(osqp.ext_builtin.OSQPSettings()) | {"raise_error"}
+        else:
+            return None
+    except Exception:  # an unexpected version of the back-end: leave its settings unchecked
+        return None
+    return frozenset(names)
+
+
+def _public(obj: Any) -> set[str]:
+    """Public attribute names of a settings object."""
+    return {a for a in dir(obj) if not a.startswith("_") and not callable(getattr(obj, a))}
+
+
+def _check_settings(spec: SolverSpec, settings: dict[str, Any]) -> None:
+    """Refuse a back-end setting the back-end does not know (it would be ignored, or fail).
+
+    Raises:
+        InputError: naming the setting, the closest known names and where the rest are listed.
+    """
+    known = backend_settings(spec.qp_name) if settings else None
+    if known is None:
+        return
+    for key in settings:
+        if key not in known:
+            close = difflib.get_close_matches(key, [*known, *_OWN_OPTIONS], n=3)
+            hint = f" (did you mean {', '.join(map(repr, close))}?)" if close else ""
+            raise InputError(
+                f"options: unknown setting {key!r} for solver {spec.name!r}{hint}; known: "
+                f"{', '.join(_OWN_OPTIONS)} and the settings of the {spec.qp_name} back-end")
 
 
 def _hit_iteration_cap(sol: Any) -> bool:
