@@ -40,8 +40,9 @@ from .scenario import Scenario, load_scenario
 
 #: Unit of a table metric whose value is a dict by unit (one row per unit).
 BY_UNIT = "by unit"
-#: Rows of the comparison table: (metric key, unit). A metric whose value is a dict gets one row
-#: per key: ``"key (sub)"`` in ``unit``, or ``key`` in the unit ``sub`` for :data:`BY_UNIT`.
+#: Rows of the comparison table: (metric key, unit). A metric of :data:`PER_KEY` (a dict) gets one
+#: row per key: ``"key (sub)"`` in ``unit``, or ``key`` in the unit ``sub`` for :data:`BY_UNIT`;
+#: other dicts (counts per stage or status) fill one row.
 TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("ee_error_max", "m"),
     ("ee_error_rms", "m"),
@@ -67,6 +68,9 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("stage_counts", "steps"),
     ("status_counts", "steps"),
 )
+
+#: Dict-valued table metrics with one row per key (by unit, by task).
+PER_KEY = ("command_change_max", "settling_time")
 
 #: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).
 UNTRACKED_METRICS = ("ee_error_max", "ee_error_rms", "ee_error_final")
@@ -155,13 +159,13 @@ class Comparison:
     def table(self) -> list[tuple[str, str, list[Any]]]:
         """Rows ``(metric, unit, values per run)`` for metrics present in at least one run.
 
-        A dict-valued metric (settling time by task, command change by unit) gives one row per
-        key, in the order the runs name them.
+        A metric of :data:`PER_KEY` (settling time by task, command change by unit) gives one
+        row per key, in the order the runs name them.
         """
         rows: list[tuple[str, str, list[Any]]] = []
         for key, unit in TABLE_METRICS:
             values = [run.metrics.get(key) for run in self.runs]
-            if any(isinstance(v, dict) for v in values):
+            if key in PER_KEY and any(isinstance(v, dict) for v in values):
                 subs = list(dict.fromkeys(k for v in values if isinstance(v, dict) for k in v))
                 for sub in subs:
                     cells = [v.get(sub) if isinstance(v, dict) else None for v in values]
