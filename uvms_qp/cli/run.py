@@ -50,6 +50,7 @@ def _summary(metrics: dict[str, Any]) -> str:
         ("bound_violation_max", ""),
         ("payload_moment_max", "N m"),
         ("payload_objective_max", "N m^2"),
+        ("command_reversals_per_s_max", "1/s"),
         ("step_time_median_us", "us"),
         ("step_time_p99_us", "us"),
         ("nan_steps", ""),
@@ -64,7 +65,14 @@ def _summary(metrics: dict[str, Any]) -> str:
                 text = ", ".join(f"{name} {count}" for name, count in value.items())
             else:
                 text = f"{value:.4g}" if isinstance(value, float) else str(value)
+            if key == "command_reversals_per_s_max":
+                text += f" ({metrics.get('command_reversals_worst_axis')})"
             lines.append(f"  {key:<28} {text} {unit}".rstrip())
+    for unit, value in (metrics.get("command_change_max") or {}).items():
+        lines.append(f"  {'command_change_max':<28} {value:.4g} {unit}")
+    for task, value in (metrics.get("settling_time") or {}).items():
+        text = "not settled" if value is None else f"{value:.4g} s"
+        lines.append(f"  {'settling_time ' + task:<28} {text}")
     return "\n".join(lines)
 
 

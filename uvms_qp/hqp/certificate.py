@@ -73,6 +73,7 @@ from time import perf_counter
 from typing import NamedTuple
 
 import numpy as np
+from scipy.optimize import nnls
 
 from .._validation import FloatArray
 from .backends.daqp_binding import DaqpBinding, open_daqp
@@ -101,6 +102,7 @@ ACT_TOL = 1e-7
 HARD_TOL = 1e-9
 #: DAQP's settings for the least-distance problems (H = I needs no proximal term)
 _LDP_SETTINGS = {"primal_tol": 1e-8, "eps_prox": 0.0, "iter_limit": 2000, "time_limit": 0.0}
+_LDP_RETRY = {**_LDP_SETTINGS, "primal_tol": 1e-6}
 _INF = 1e30  # DAQP's infinity
 _KEEP = 8  # workspaces kept (the problems a solver alternates between: full, relaxed)
 
@@ -366,6 +368,13 @@ class Certifier:
                 top = start
                 np.divide(grads[i], size[i], out=f)
                 solved[i] = binding.solve_cold(i == u - 1) == 1
+                if not solved[i]:
+                    # DAQP can call a degenerate set of active rows (more than the free
+                    # variables, nearly dependent) infeasible at a tight tolerance; a looser one
+                    # only loosens the multipliers, which the bound then charges
+                    binding.settings = _LDP_RETRY
+                    solved[i] = binding.solve_cold(False) == 1
+                    binding.settings = _LDP_SETTINGS
                 if solved[i]:  # (a failed solve leaves DAQP's multipliers as they were)
                     LAM[i, :start] = binding.lam[:start]
         LAM *= size[:, None]
@@ -377,7 +386,7 @@ class Certifier:
             width = np.where(unboxed, 0.0, width)
         bound = _Bound(Ae, grads, act, np.where(act, D, 0.0), width, np.maximum(ay, 1.0), head,
                        self.freeze_tol)
-        R, L, df_act, freeze = bound(LAM)
+        R, _, df_act, freeze = bound(LAM)
         absR = np.abs(R)
         df = absR.dot(width)
         df += df_act
@@ -393,15 +402,13 @@ class Certifier:
         for i, k in enumerate(unmet):
             rho, tol_k = residuals[k], opt_tol * scales[i]
             verdict, gap = _verdict(dfl[i], frl[i], loose[i], rho, tol_k)
-            if verdict != CERTIFIED and (loose[i] or not solved[i]):
-                # exact multipliers on the constraints DAQP found active (its own are accurate
-                # to its primal tolerance: what an unboxed variable needs, or DAQP stopped
-                # early); an unboxed residual left is then moved onto the level's own rows
-                J = np.flatnonzero(L[i, :spans[k][0]])  # (rows above level k only)
-                lam = np.zeros((1, end))
-                if J.size:
-                    lam[0, J] = np.linalg.lstsq(Ae[J].T, -grads[i], rcond=None)[0]
-                R2, _, act2, fr2 = bound(lam, [i])
+            if verdict != CERTIFIED:
+                # the multipliers again by non-negative least squares on the same active sides
+                # (DAQP's are accurate to its primal tolerance only, and its dual active set
+                # can stall on a degenerate set: more active rows than free variables, rows
+                # active on both sides); an unboxed residual left is then moved onto the
+                # level's own rows
+                R2, _, act2, fr2 = bound(_nnls(Ae, grads[i], act, spans[k][0]), [i])
                 r, extra = R2[0], 0.0
                 if unboxed is not None:
                     r, extra = _unboxed_dual(problem, k, s, r, unboxed)
@@ -457,6 +464,27 @@ class _Bound:
         freeze = absL[:, head:].dot(self.big[head:])
         freeze *= self.freeze_tol
         return R, L, df_act, freeze
+
+
+def _nnls(Ae: FloatArray, g: FloatArray, act: np.ndarray, start: int) -> FloatArray:
+    """Signed multipliers (1, m) of ``min |g + A' lambda|`` on the active sides of rows < start.
+
+    One :func:`scipy.optimize.nnls` on unit columns (``+a`` at an upper side, ``-a`` at a lower
+    one).
+    """
+    up = np.flatnonzero(act[1, :start])
+    dn = np.flatnonzero(act[0, :start])
+    lam = np.zeros((1, Ae.shape[0]))
+    if not up.size + dn.size:
+        return lam
+    rows = np.concatenate((up, dn))
+    norms = np.sqrt(np.einsum("ij,ij->i", Ae[rows], Ae[rows]))
+    live = norms > 0.0
+    rows, norms = rows[live], norms[live]
+    sign = np.where(np.arange(live.size)[live] < up.size, 1.0, -1.0)
+    coef, _ = nnls((Ae[rows] * (sign / norms)[:, None]).T, -g, maxiter=50 * max(rows.size, 10))
+    np.add.at(lam[0], rows, sign * coef / norms)
+    return lam
 
 
 def _unboxed_dual(problem: Problem, k: int, s: FloatArray, r: FloatArray, unboxed: np.ndarray

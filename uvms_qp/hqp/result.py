@@ -29,6 +29,11 @@ class Status(StrEnum):
             placeholder (the closest point the back-end reached).
         BACKEND_ERROR: the back-end failed or could not enforce a requirement (message says which);
             ``x`` is finite but must not be used as a lexicographic optimum.
+        DAMPED: ``x`` is the lexicographic optimum of the problem with damping rows added to some
+            levels near a singularity (:mod:`uvms_qp.hqp.damping`), not of the problem without
+            them: those levels trade residual for bounded rates.
+        BLENDED: ``x`` is a convex combination of the optima with and without tasks whose
+            activation ramps between 0 and 1: the optimum of neither.
     """
 
     OPTIMAL = "optimal"
@@ -36,6 +41,8 @@ class Status(StrEnum):
     UNPROVEN = "unproven"
     HARD_INFEASIBLE = "hard_infeasible"
     BACKEND_ERROR = "backend_error"
+    DAMPED = "damped"
+    BLENDED = "blended"
 
 
 #: How a summary reads the certificate's verdict on a level.

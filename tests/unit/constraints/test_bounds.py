@@ -35,7 +35,8 @@ def _with_joints(model, joints):
 
 def test_registry():
     assert set(CONSTRAINT_TYPES) == {"joint_position_bounds", "joint_velocity_bounds",
-                                     "vehicle_rate_bounds", "linear_inequality"}
+                                     "vehicle_rate_bounds", "command_rate_bounds",
+                                     "linear_inequality"}
 
 
 def test_joint_position_bounds_one_euler_step_stays_inside(rov):

@@ -143,6 +143,12 @@ def test_update_validates_and_applies(rov):
         payload.update(mass=3.0)
 
 
+def test_station_keeping_holds_the_whole_actuated_pose_by_default(rov):
+    assert StationKeepingTask().bind(rov).axes == ["x", "y", "z", "phi", "theta", "psi"]
+    four = load_model("wang_9dof")  # roll and pitch passive
+    assert StationKeepingTask().bind(four).axes == ["x", "y", "z", "psi"]
+
+
 def test_station_keeping_holds_activation_pose(rov):
     rng = np.random.default_rng(0)
     task = StationKeepingTask(gain=2.0).bind(rov)
@@ -152,7 +158,7 @@ def test_station_keeping_holds_activation_pose(rov):
     q1 = rov.integrate(q0, np.r_[0.3, 0, 0, 0, 0, 0.2, 0, 0, 0, 0], 1.0)
     e = task.compute_error(rov.state(q1), 0.0)
     eta0, eta1 = rov.split(q0)[0], rov.split(q1)[0]
-    np.testing.assert_allclose(e, (eta0 - eta1)[[0, 1, 2, 5]], atol=1e-12)
+    np.testing.assert_allclose(e, eta0 - eta1, atol=1e-12)  # all six: roll and pitch actuated
     task.reset()
     np.testing.assert_allclose(task.compute_error(rov.state(q1), 0.0), 0.0)
     current = StationKeepingTask(hold="current").bind(rov)
