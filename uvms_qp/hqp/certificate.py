@@ -55,7 +55,10 @@ lowest level in place (the rows a controller writes every tick); per answer, one
 ``A x`` gives every distance to a frozen side and one product every unmet level's gradient;
 the levels are then solved from the lowest unmet one up, each switching off the rows of the
 level below it (infinite sides) and handing DAQP its unit gradient (two C calls from an empty
-working set); the bounds of all levels come from a few matrix products. Levels met to tolerance
+working set); the bounds of all levels come from a few matrix products. A level these
+multipliers leave unproven gets them once more by non-negative least squares on the same active
+sides (DAQP's dual active set can stall on a degenerate set: more active sides than free
+variables, rows active on both sides). Levels met to tolerance
 cost nothing, and an answer whose levels are all met is not looked at. Measured in
 ``benchmarks/bench_certificate.py``.
 
@@ -402,7 +405,7 @@ class Certifier:
         for i, k in enumerate(unmet):
             rho, tol_k = residuals[k], opt_tol * scales[i]
             verdict, gap = _verdict(dfl[i], frl[i], loose[i], rho, tol_k)
-            if verdict != CERTIFIED:
+            if verdict == UNPROVEN:
                 # the multipliers again by non-negative least squares on the same active sides
                 # (DAQP's are accurate to its primal tolerance only, and its dual active set
                 # can stall on a degenerate set: more active rows than free variables, rows
