@@ -173,6 +173,18 @@ def as_scalar(
     return number
 
 
+def as_time(t: Any) -> float:
+    """A time ``t`` [s] as a finite float (a real number; not a boolean, string or None).
+
+    Raises:
+        InputError: not a real number.
+        NonFiniteError: NaN or inf.
+    """
+    if type(t) is float and t - t == 0.0:  # the common case: finite (NaN and inf give NaN)
+        return t
+    return as_scalar(t, "t")
+
+
 def check_bounds_order(lower: FloatArray, upper: FloatArray, name: str) -> None:
     """Raise :class:`BoundsError` if any ``lower[i] > upper[i]``."""
     bad = np.flatnonzero(lower > upper)

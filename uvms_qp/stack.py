@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
+from ._validation import as_scalar
 from .constraints.constraint import Constraint
 from .errors import InputError
 from .tasks.task import Task
@@ -30,13 +31,18 @@ class Level:
     """One priority level: tasks whose rows are traded off by their weights.
 
     ``Level(task_a, task_b)`` or ``Level([task_a, task_b])``; an optional ``name`` labels it in
-    diagnostics.
+    diagnostics. ``damping`` sets the level's damping threshold ``epsilon`` (>= 0, 0: none; in
+    the units of its weighted rows per unit of ``W^(1/2) zeta``): directions of the level whose
+    singular value in the freedom the higher levels leave falls below it are damped
+    (:mod:`uvms_qp.hqp.damping`); None takes the controller's.
 
     Raises:
-        InputError: an empty level, or an item that is not a :class:`~uvms_qp.tasks.Task`.
+        InputError: an empty level, an item that is not a :class:`~uvms_qp.tasks.Task`, or a
+            negative damping.
     """
 
-    def __init__(self, *tasks: Task | Iterable[Task], name: str | None = None) -> None:
+    def __init__(self, *tasks: Task | Iterable[Task], name: str | None = None,
+                 damping: float | None = None) -> None:
         items: list[Any] = []
         for item in tasks:
             if isinstance(item, Task):
@@ -53,6 +59,8 @@ class Level:
                 raise InputError(f"{label} item {i}: expected a Task, got {type(task).__name__}")
         self.tasks: tuple[Task, ...] = tuple(items)
         self.name = name
+        self.damping = None if damping is None else as_scalar(
+            damping, f"{label}.damping", nonnegative=True)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -173,10 +181,26 @@ class Stack:
         self.model = model
         return self
 
+    def check_period(self, dt: float) -> None:
+        """Check every task against the control period ``dt`` [s] (:meth:`Task.check_period`).
+
+        Raises:
+            InputError: a task whose rows would not settle at this period, with its location.
+        """
+        for k, level in enumerate(self.levels):
+            for i, task in enumerate(level.tasks):
+                try:
+                    task.check_period(dt)
+                except InputError as exc:
+                    exc.args = (f"levels[{k}].tasks[{i}] ({task.name}): {exc}", *exc.args[1:])
+                    raise
+
     def reset(self) -> None:
-        """Reset every task's run-time memory."""
+        """Reset every task's and constraint's run-time memory."""
         for t in self.tasks:
             t.reset()
+        for c in self.constraints:
+            c.reset()
 
     def describe(self) -> str:
         """A readable listing of levels, tasks and constraints."""

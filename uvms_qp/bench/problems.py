@@ -311,7 +311,12 @@ def family(name: str, count: int, seed: int = 0, models: dict[str, Any] | None =
 
 
 # ---------------------------------------------------------------------------- controller
-def _controller_stack(name: str, target: list[float]) -> Any:
+def controller_stack(name: str, target: list[float]) -> Any:
+    """The stack of a controller family, its end-effector task (level 0) aimed at ``target``.
+
+    ``shared_yaw`` and ``shared_joint`` (else the demo stack), under the families' bounds;
+    ``target`` [m, world].
+    """
     bounds = [JointPositionBounds(gain=0.5), JointVelocityBounds(),
               VehicleRateBounds(linear=0.5, angular=0.3)]
     if name == "shared_yaw":
@@ -353,7 +358,7 @@ def controller_problem(name: str, seed: int, models: dict[str, Any] | None = Non
         q = model.random_configuration(rng)
     state = model.state(q)
     target = state.position("tool") + rng.normal(scale=0.3, size=3)
-    stack = _controller_stack(name, [float(v) for v in target])
+    stack = controller_stack(name, [float(v) for v in target])
     ctrl = Controller(model, stack, dt=float(rng.choice([0.01, 0.05, 0.1])))
     rows = ctrl.level_rows(state, 0.0)
     lower, upper = ctrl.bounds(state)

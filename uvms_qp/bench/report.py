@@ -153,8 +153,8 @@ def _fmt(value: float, spec: str = ".3g") -> str:
 
 
 HEADERS: tuple[str, ...] = (
-    "set", "solver", "success", "median us", "p95 us", "p99 us", "max us", "C us", "SGM",
-    "x daqp", "x pink", "hard viol", "gap best", "gap null", "acc hi/lo", "NaN",
+    "set", "solver", "success", "unproven", "median us", "p95 us", "p99 us", "max us", "C us",
+    "SGM", "x daqp", "x pink", "hard viol", "gap best", "gap null", "acc hi/lo", "NaN",
 )
 
 
@@ -168,6 +168,7 @@ def table_rows(summaries: list[Summary]) -> list[list[str]]:
         rows.append([
             s.set, s.solver,
             f"{s.success_rate:.3f} ({s.successes}/{s.trials})",
+            str(s.failures.get("unproven", 0)),
             _fmt(s.median_us, ".1f"), _fmt(s.p95_us, ".1f"), _fmt(s.p99_us, ".1f"),
             _fmt(s.max_us, ".0f"), _fmt(s.backend_us, ".1f"), _fmt(s.sgm_ratio, ".2f"),
             _fmt(s.vs_daqp, ".2f"), _fmt(s.vs_pink, ".2f"),
@@ -201,6 +202,8 @@ TERMINAL_WIDTH = 100
 def _terminal_cells(row: list[str]) -> list[str]:
     cells = dict(zip(HEADERS, row, strict=True))
     cells["success"] = cells["success"].split(" ")[-1].strip("()")  # "1.000 (30/30)" -> "30/30"
+    if cells["unproven"] != "0":  # "28/30 2u": two of the failures not proven optimal
+        cells["success"] += f" {cells['unproven']}u"
     return [cells[h] for h in TERMINAL_HEADERS]
 
 
@@ -233,7 +236,9 @@ def print_table(summaries: list[Summary], console: Any = None, title: str = "") 
             style = "red"
         table.add_row(*_terminal_cells(row), style=style)
     console.print(table)
-    console.print("success = verified/trials; x daqp = per-problem time ratio to daqp (median); "
+    console.print("success = verified/trials (Nu: N failures are answers inside the hard set that "
+                  "the optimality certificate could not prove); x daqp = "
+                  "per-problem time ratio to daqp (median); "
                   "hard viol = largest hard-row violation of a claimed success; gap best = "
                   "largest per-level optimality gap to the best answer. All columns: "
                   "--markdown FILE or --csv FILE.", markup=False, highlight=False)

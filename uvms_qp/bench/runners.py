@@ -59,7 +59,9 @@ PRIORITY_RATIO = 1e4
 #: Back-end of the ``weighted`` runner (one plain QP).
 WEIGHTED_BACKEND = "cascade:daqp"
 
-OK_STATUSES = ("optimal", "level_infeasible")
+#: Statuses of a verified answer: the lexicographic optimum, or the controller's damped or blended
+#: one (the optimum of the stack with damping rows near a singularity; tasks ramping).
+OK_STATUSES = ("optimal", "level_infeasible", "damped", "blended")
 #: Note of a null-space answer clipped into the box (then not a lexicographic reference).
 SATURATED = "saturated into the hard box"
 

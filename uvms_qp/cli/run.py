@@ -50,16 +50,29 @@ def _summary(metrics: dict[str, Any]) -> str:
         ("bound_violation_max", ""),
         ("payload_moment_max", "N m"),
         ("payload_objective_max", "N m^2"),
+        ("command_reversals_per_s_max", "1/s"),
         ("step_time_median_us", "us"),
         ("step_time_p99_us", "us"),
         ("nan_steps", ""),
+        ("stage_counts", ""),
+        ("status_counts", ""),
     )
     lines = []
     for key, unit in keys:
         if key in metrics and metrics[key] is not None:
             value = metrics[key]
-            text = f"{value:.4g}" if isinstance(value, float) else str(value)
+            if isinstance(value, dict):  # counts per stage or status
+                text = ", ".join(f"{name} {count}" for name, count in value.items())
+            else:
+                text = f"{value:.4g}" if isinstance(value, float) else str(value)
+            if key == "command_reversals_per_s_max":
+                text += f" ({metrics.get('command_reversals_worst_axis')})"
             lines.append(f"  {key:<28} {text} {unit}".rstrip())
+    for unit, value in (metrics.get("command_change_max") or {}).items():
+        lines.append(f"  {'command_change_max':<28} {value:.4g} {unit}")
+    for task, value in (metrics.get("settling_time") or {}).items():
+        text = "not settled" if value is None else f"{value:.4g} s"
+        lines.append(f"  {'settling_time ' + task:<28} {text}")
     return "\n".join(lines)
 
 

@@ -5,7 +5,8 @@
 
 from __future__ import annotations
 
-from .constraint import Constraint
+from .command_rate_bounds import CommandRateBounds
+from .constraint import Constraint, intersect_boxes
 from .joint_position_bounds import JointPositionBounds
 from .joint_velocity_bounds import JointVelocityBounds
 from .linear_inequality import LinearInequality
@@ -13,15 +14,18 @@ from .vehicle_rate_bounds import VehicleRateBounds
 
 CONSTRAINT_TYPES: dict[str, type[Constraint]] = {
     cls.type_name: cls
-    for cls in (JointPositionBounds, JointVelocityBounds, VehicleRateBounds, LinearInequality)
+    for cls in (JointPositionBounds, JointVelocityBounds, VehicleRateBounds, CommandRateBounds,
+                LinearInequality)
 }
 """Scenario ``type`` string -> constraint class."""
 
 __all__ = [
     "CONSTRAINT_TYPES",
+    "CommandRateBounds",
     "Constraint",
     "JointPositionBounds",
     "JointVelocityBounds",
     "LinearInequality",
     "VehicleRateBounds",
+    "intersect_boxes",
 ]

@@ -5,11 +5,17 @@ and evaluated every control tick with the control period ``dt`` [s]. Box constra
 their bounds into the controller's box (:meth:`Constraint.fill_box`); row constraints write hard
 rows ``lower <= A zeta <= upper`` (:meth:`Constraint.fill_rows`). Both hold at every level of the
 hierarchy and with every back-end.
+
+A constraint with memory (the command-rate bounds) learns the command the controller sent through
+:meth:`Constraint.command_sent`, and forgets it in :meth:`Constraint.reset`. A box that
+:attr:`Constraint.yields` is intersected after the others and clipped into them
+(:func:`intersect_boxes`): it never empties the box.
 """
 
 from __future__ import annotations
 
 from abc import ABC
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -40,6 +46,9 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
     has_box: ClassVar[bool] = False
     is_static: ClassVar[bool] = False
     """True when the box does not depend on the state (the controller then merges it once)."""
+    yields: ClassVar[bool] = False
+    """True for a box that gives way to the others: filled after them and clipped into their
+    intersection (position safety first), so it never empties the box."""
 
     def __init__(self, *, name: str | None = None) -> None:
         if name is not None and (not isinstance(name, str) or not name.strip()):
@@ -73,6 +82,16 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
         self, state: State, dt: float, A: FloatArray, lower: FloatArray, upper: FloatArray
     ) -> None:
         """Write the hard rows into ``A`` (rows_dim, nv), ``lower``, ``upper``."""
+
+    # ------------------------------------------------------------------------------ run-time hooks
+    def command_sent(self, zeta: FloatArray) -> None:  # noqa: B027 - optional hook
+        """The command ``zeta`` (nv,) the controller returned this period (called every step).
+
+        Constraints with memory (the command-rate bounds) keep it; the others ignore it.
+        """
+
+    def reset(self) -> None:  # noqa: B027 - optional hook
+        """Forget run-time memory (called by ``Stack.reset`` and ``Controller.reset``)."""
 
     # ----------------------------------------------------------------------------------- user API
     def box(self, state: State, dt: float) -> tuple[FloatArray, FloatArray]:
@@ -131,3 +150,18 @@ class SymmetricRateBox(Constraint):
         lower[cols] = np.maximum(lower[cols], -self._lim)
         upper[cols] = np.minimum(upper[cols], self._lim)
 
+
+
+def intersect_boxes(constraints: Iterable[Constraint], state: State, dt: float,
+                    lower: FloatArray, upper: FloatArray) -> None:
+    """Intersect the boxes of ``constraints`` into ``lower``/``upper`` (nv,) in place.
+
+    Boxes that :attr:`Constraint.yields` come last, each clipped into what the others left.
+    """
+    boxes = [c for c in constraints if c.has_box]
+    for c in boxes:
+        if not c.yields:
+            c.fill_box(state, dt, lower, upper)
+    for c in boxes:
+        if c.yields:
+            c.fill_box(state, dt, lower, upper)

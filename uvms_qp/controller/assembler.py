@@ -9,19 +9,32 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..errors import BoundsError, InputError, NonFiniteError
-from ..hqp import Problem
+from ..hqp import Problem, Status
+from ..hqp.damping import DEFAULT_THRESHOLD, Damping
+from ..hqp.measure import measure
 from ..hqp.validate import finite_ok
 from ..rows import Rows
 from ..safety import SafeSolve
 from ..stack import Stack
 from ..tasks.task import Task
-from .result import StepResult, TaskErrors, TaskLayout, TaskResiduals
+from .history import CommandHistory, box_bounds
+from .result import Reversals, StepResult, TaskErrors, TaskLayout, TaskResiduals
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 _ROW_WEIGHTS = attrgetter("row_weights")
 _LAST_ERROR = attrgetter("_error")  # as set: made an array by the lazy report
+_ACTIVATION = attrgetter("activation")
+
+
+class _Slacks:
+    """The slacks of the stack's own problem at a command measured on another problem."""
+
+    __slots__ = ("slacks",)
+
+    def __init__(self, slacks: FloatArray) -> None:
+        self.slacks = slacks
 
 
 def not_a_state(value: Any) -> InputError:
@@ -51,6 +64,8 @@ class StackAssembler:
         stack: Levels of tasks and hard constraints (bound to ``model`` here).
         dt: Control period [s] (turns position limits into rate bounds).
         metric: Diagonal W (nv,) of the final regularisation (validated).
+        damping: Damping threshold of the levels that set none (``Level(damping=...)``), >= 0
+            (0: no damping; :mod:`uvms_qp.hqp.damping`).
 
     Attributes:
         problem: The problem the stack is written into.
@@ -58,15 +73,21 @@ class StackAssembler:
         layout: Where each task's rows sit (for the per-task reports).
         level_names: Task names of each level.
         weights_version: Incremented whenever a row weight changed.
+        damping: Damping threshold of each level (None when every one is 0).
+        no_rows: ``(None,) * levels``: no rows to add to any level.
+        history: The commands of the last second (:class:`CommandHistory`).
 
     Raises:
-        InputError: any binding error of the stack, with its location.
+        InputError: any binding error of the stack, with its location; a task whose rows would
+            not settle at this period (:meth:`Stack.check_period`).
         BoundsError: the static boxes of the constraints do not intersect.
     """
 
-    def __init__(self, model: Model, stack: Stack, dt: float, metric: FloatArray) -> None:
+    def __init__(self, model: Model, stack: Stack, dt: float, metric: FloatArray,
+                 damping: float = DEFAULT_THRESHOLD) -> None:
         self.model = model
         self.stack = stack.bind(model)
+        self.stack.check_period(dt)
         self.dt = dt
         nv = int(model.nv)
         self.nv = nv
@@ -89,7 +110,10 @@ class StackAssembler:
                                     hi[r:r + c.rows_dim]))
             r += c.rows_dim
         self._box_cons = [c for c in self.stack.constraints if c.has_box]
-        self._dynamic_box = [c for c in self._box_cons if not c.is_static]
+        # a box that yields (command-rate bounds) is filled last, clipped into the others
+        self._dynamic_box = sorted((c for c in self._box_cons if not c.is_static),
+                                   key=lambda c: c.yields)
+        self._constraints = self.stack.constraints
         self._box = problem.sides[:, :nv]
         self._lower, self._upper = self._box  # views
         self._static_box = np.empty((2, nv))
@@ -105,6 +129,13 @@ class StackAssembler:
         head = problem.head
         self._weight_rows = [slice(a - head, b - head) for a, b in spans]
         self.level_names = tuple(level.names for level in levels)
+        self._task_level = tuple(k for k, level in enumerate(levels) for _ in level)
+        self._derived: dict[tuple[Any, ...], tuple[Problem, Any, Any, Any]] = {}
+        thresholds = tuple(damping if level.damping is None else level.damping
+                           for level in levels)
+        self.damping = thresholds if any(thresholds) else None
+        self.no_rows: tuple[None, ...] = (None,) * len(levels)
+        self.history = CommandHistory(nv, dt, box_bounds(*self._static_box))
         self.layout = TaskLayout(tuple(t.name for t in self.tasks), tuple(spans),
                                  tuple(t.rate_unit for t in self.tasks),
                                  tuple(t.error_unit for t in self.tasks))
@@ -138,6 +169,76 @@ class StackAssembler:
             self._diagnose(state)
         return problem
 
+    def activation(self) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """``(out, ramping)``: indices of the tasks at activation 0 and strictly between 0 and 1.
+
+        Read after :meth:`fill` (which advances the tasks' ramps to this tick).
+        """
+        values = list(map(_ACTIVATION, self.tasks))
+        if min(values) == 1.0:
+            return (), ()
+        return (tuple(i for i, a in enumerate(values) if a == 0.0),
+                tuple(i for i, a in enumerate(values) if 0.0 < a < 1.0))
+
+    def reset(self) -> None:
+        """Forget the run-time memory of every task and constraint, and the command history."""
+        self.stack.reset()
+        self.history.reset()
+
+    def derived(self, excluded: tuple[int, ...], extra: tuple[FloatArray | None, ...]
+                ) -> Problem:
+        """This tick's problem without the rows of some tasks and with rows added to levels.
+
+        Args:
+            excluded: Indices (into :attr:`tasks`) of the tasks whose rows are left out (tasks
+                out of the stack, activation 0).
+            extra: Per level, rows ``D`` (r, n) appended with target 0 and weight 1 (damping
+                rows), or None.
+
+        Returns:
+            A problem with the same box, hard rows and levels, filled from :attr:`problem`
+            (buffers kept per shape, so a back-end keeps its set-up for it).
+        """
+        base = self.problem
+        key = (excluded, tuple(0 if d is None else d.shape[0] for d in extra))
+        entry = self._derived.get(key)
+        if entry is None:
+            entry = self._derived[key] = self._derived_layout(*key)
+        problem, source, target, blocks = entry
+        problem.A[target] = base.A[source]
+        problem.sides[:, target] = base.sides[:, source]
+        head = base.head
+        w = problem.w
+        w.fill(1.0)
+        w[target[head:] - head] = base.w[source[head:] - head]
+        for start, D in zip(blocks, extra, strict=True):
+            if D is not None:
+                r = D.shape[0]
+                problem.A[start:start + r] = D
+                problem.sides[:, start:start + r] = 0.0
+        problem.set_weights(w)
+        return problem
+
+    def _derived_layout(self, excluded: tuple[int, ...], counts: tuple[int, ...]
+                        ) -> tuple[Problem, Any, Any, tuple[int, ...]]:
+        """The buffers of :meth:`derived` for one shape: problem, row maps, extra-row starts."""
+        base = self.problem
+        head = base.head
+        source, target = list(range(head)), list(range(head))
+        sizes, blocks = [], []
+        out = head
+        for k in range(len(base.sizes)):
+            kept = [i for j, (a, b) in enumerate(self.layout.spans)
+                    if self._task_level[j] == k and j not in excluded for i in range(a, b)]
+            source.extend(kept)
+            target.extend(range(out, out + len(kept)))
+            out += len(kept)
+            blocks.append(out)
+            out += counts[k]
+            sizes.append(len(kept) + counts[k])
+        problem = Problem(base.n, base.mh, sizes, base.W)
+        return problem, np.asarray(source), np.asarray(target), tuple(blocks)
+
     def check_box(self, state: State) -> None:
         """Raise BoundsError naming the constraints when this tick's box is empty.
 
@@ -158,15 +259,34 @@ class StackAssembler:
         self.weights_version += 1
 
     def step_result(self, out: SafeSolve, t: float, step_time: float, scheme: str,
-                    solver: str) -> StepResult:
-        """The step result of a ladder outcome (reports read lazily from its slacks)."""
+                    solver: str, status: Status | None = None, solved: Problem | None = None,
+                    damping: Damping | None = None, excluded: tuple[int, ...] = (),
+                    ramping: tuple[int, ...] = ()) -> StepResult:
+        """The step result of a ladder outcome (reports read lazily from its slacks).
+
+        Hands the command to the constraints (:meth:`Constraint.command_sent`) and to the
+        history. ``solved`` is the problem the answer was measured on when it is not this
+        stack's own (tasks left out, damping rows): the task reports are then measured on the
+        stack's problem.
+        """
+        x = out.x
+        for c in self._constraints:
+            c.command_sent(x)
+        ring, count = self.history.record(x)
         result = out.result
         box = result.box
+        source: Any = result
+        if solved is not None and solved is not self.problem:
+            source = _Slacks(measure(self.problem, x)[0])
+        tasks = self.tasks
         return StepResult(
-            out.x, result.status, result, t, step_time, scheme, solver,
-            box[0], box[1], out.clip_flagged, self.level_names, out.stage, out.clipped,
-            out.deadline_missed, out.attempts, TaskResiduals(self.layout, result),
-            TaskErrors(self.layout, tuple(map(_LAST_ERROR, self.tasks))))
+            x, result.status if status is None else status, result, t, step_time, scheme,
+            solver, box[0], box[1], out.clip_flagged, self.level_names, out.stage, out.clipped,
+            out.deadline_missed, out.attempts, TaskResiduals(self.layout, source),
+            TaskErrors(self.layout, tuple(map(_LAST_ERROR, tasks))),
+            damping=damping, inactive=tuple(tasks[i].name for i in excluded),
+            ramping={tasks[i].name: tasks[i].activation for i in ramping},
+            reversals=Reversals(self.history, ring.copy(), count, self.model.zeta_names))
 
     # ------------------------------------------------------------------------- inspection
     def level_rows(self, state: State, t: float = 0.0) -> list[Rows]:

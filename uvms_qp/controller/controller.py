@@ -17,6 +17,7 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
+from ..hqp.damping import DEFAULT_THRESHOLD
 from ..model import Model
 from ..rows import Rows
 from ..safety import SafeSolver
@@ -68,6 +69,10 @@ class Controller:
             zero; see :mod:`uvms_qp.safety` and ``docs/reliability.md``).
         deadline: Wall-time budget of one step [s] (None: none); back-ends get matching time or
             iteration limits and the fallback ladder skips its solver stages once it has passed.
+        damping: Damping threshold of every level that sets none (``Level(damping=...)``),
+            >= 0: a level's directions whose singular value, in the freedom the higher levels
+            leave, is below it get bounded rates (:mod:`uvms_qp.hqp.damping`); away from
+            singularities nothing changes. 0 turns damping off.
 
     Raises:
         InputError: bad dt, metric or scheme; any binding error of the stack (unknown frame,
@@ -79,7 +84,7 @@ class Controller:
     def __init__(self, model: Model, stack: Stack, solver: str = "daqp", dt: float = 0.05,
                  metric: Any = None, *, scheme: str = "hqp", priority_ratio: float = 1e4,
                  options: dict[str, Any] | None = None, strict: bool = False,
-                 deadline: float | None = None) -> None:
+                 deadline: float | None = None, damping: float = DEFAULT_THRESHOLD) -> None:
         _check_arguments(model, solver, options, strict)
         if not isinstance(stack, Stack):
             raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
@@ -93,7 +98,8 @@ class Controller:
                        else as_vector(metric, "metric", self.nv, positive=True).copy())
         self.strict = bool(strict)
         self.scheme = scheme
-        self.assembler = StackAssembler(model, stack, self.dt, self.metric)
+        self.damping = as_scalar(damping, "damping", nonnegative=True)
+        self.assembler = StackAssembler(model, stack, self.dt, self.metric, self.damping)
         self.stack = self.assembler.stack
         self._scheme = SCHEMES[scheme](self.assembler, solver=solver, options=options,
                                        deadline=deadline, strict=self.strict,
@@ -109,10 +115,11 @@ class Controller:
         that produced zeta.
 
         Raises:
-            InputError: a task whose target was never set, a state of another model, or
-                something other than a State (e.g. a configuration array; use ``model.state(q)``).
-            NonFiniteError: a task produced NaN/inf rows (the message names the task); bad input
-                never reaches a back-end.
+            InputError: a task whose target was never set, a state of another model,
+                something other than a State (e.g. a configuration array; use
+                ``model.state(q)``), or a time ``t`` that is not a real number.
+            NonFiniteError: a task produced NaN/inf rows (the message names the task), or ``t``
+                is NaN or inf; bad input never reaches a back-end.
             BoundsError: the hard box is empty (the message names the constraints involved): no
                 command can satisfy it.
             NoSolutionFound: strict mode, and no back-end returned a verified solution.
@@ -140,8 +147,8 @@ class Controller:
 
     @property
     def status_counts(self) -> Counter[str]:
-        """Steps per status since construction."""
-        return self._scheme.safe.status_counts
+        """Steps per status of their results since construction (``damped``, ``blended`` too)."""
+        return self._scheme.status_counts
 
     def level_rows(self, state: State, t: float = 0.0) -> list[Rows]:
         """Rows of every level at ``(state, t)`` (fresh copies; for inspection and tests)."""

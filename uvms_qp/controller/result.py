@@ -9,7 +9,12 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..hqp import HierarchyResult, Status, hard_violation
+from ..hqp.damping import Damping
 from ..hqp.result import OK_STATUSES
+from .history import HISTORY_WINDOW, CommandHistory, reversals_per_s
+
+#: Statuses of a verified answer of a scheme: the lexicographic optimum, damped or blended.
+USABLE_STATUSES = (*OK_STATUSES, Status.DAMPED, Status.BLENDED)
 
 Report = Mapping[str, tuple[float, str]]
 """Task name -> (value, unit)."""
@@ -96,6 +101,31 @@ class TaskErrors(_Lazy):
         return out
 
 
+class Reversals:
+    """The controller's reversal figure at one step, computed when first asked.
+
+    Args:
+        history: The controller's command history (bounds, period).
+        ring: A copy of its ring after this step's command.
+        count: Commands recorded up to and including this one.
+        names: Names of the entries of zeta.
+    """
+
+    __slots__ = ("_count", "_history", "_names", "_ring", "_value")
+
+    def __init__(self, history: CommandHistory, ring: FloatArray, count: int,
+                 names: tuple[str, ...]) -> None:
+        self._history, self._ring, self._count, self._names = history, ring, count, names
+        self._value: float | None = None
+
+    @property
+    def per_s(self) -> float:
+        """The worst entry's reversals per second over the last second of commands [1/s]."""
+        if self._value is None:
+            self._value = reversals_per_s(self._history, self._ring, self._count)
+        return self._value
+
+
 class StepResult:
     """Outcome of one control tick; never None, ``zeta`` always finite.
 
@@ -122,11 +152,19 @@ class StepResult:
         attempts: Why each earlier stage was rejected (empty on the happy path).
         task_residuals: Task name -> (norm of its row violation at zeta, unit of its rows).
         task_errors: Task name -> (norm of its error or objective value this tick, unit).
+        damping: The damping rows added to the levels this tick and each level's smallest
+            singular value (:class:`~uvms_qp.hqp.damping.Damping`), or None when no level was
+            damped. With it the status is ``damped`` and ``hierarchy`` measures zeta against the
+            problem with the damping rows.
+        inactive: Names of the tasks out of the stack this tick (activation 0).
+        ramping: Task name -> activation of the tasks ramping in or out (status ``blended``).
+        reversals: The controller's reversal figure (:attr:`reversals_per_s`), or None.
     """
 
-    __slots__ = ("attempts", "clipped", "deadline_missed", "hierarchy", "level_names", "lower",
-                 "saturated", "scheme", "solver", "stage", "status", "step_time", "t",
-                 "task_errors", "task_residuals", "upper", "zeta")
+    __slots__ = ("attempts", "clipped", "damping", "deadline_missed", "hierarchy", "inactive",
+                 "level_names", "lower", "ramping", "reversals", "saturated", "scheme", "solver",
+                 "stage", "status", "step_time", "t", "task_errors", "task_residuals", "upper",
+                 "zeta")
 
     def __init__(self, zeta: FloatArray, status: Status, hierarchy: HierarchyResult | None,
                  t: float, step_time: float, scheme: str, solver: str, lower: FloatArray,
@@ -134,7 +172,9 @@ class StepResult:
                  level_names: tuple[tuple[str, ...], ...] = (), stage: str = "primary",
                  clipped: float = 0.0, deadline_missed: bool = False,
                  attempts: tuple[str, ...] = (), task_residuals: Report | None = None,
-                 task_errors: Report | None = None) -> None:
+                 task_errors: Report | None = None, *, damping: Damping | None = None,
+                 inactive: tuple[str, ...] = (), ramping: Mapping[str, float] | None = None,
+                 reversals: Reversals | None = None) -> None:
         self.zeta, self.status, self.hierarchy = zeta, status, hierarchy
         self.t, self.step_time, self.scheme, self.solver = t, step_time, scheme, solver
         self.lower, self.upper, self.saturated = lower, upper, saturated
@@ -142,11 +182,34 @@ class StepResult:
         self.deadline_missed, self.attempts = deadline_missed, attempts
         self.task_residuals: Report = {} if task_residuals is None else task_residuals
         self.task_errors: Report = {} if task_errors is None else task_errors
+        self.damping, self.inactive = damping, inactive
+        self.ramping: Mapping[str, float] = {} if ramping is None else ramping
+        self.reversals = reversals
 
     @property
     def ok(self) -> bool:
-        """True when zeta is the scheme's optimum (``optimal`` or ``level_infeasible``)."""
-        return self.status in OK_STATUSES
+        """True when zeta is the scheme's verified answer.
+
+        The lexicographic optimum (``optimal``, ``level_infeasible``), or the controller's
+        smoothed form of it: ``damped`` (the optimum of the stack with damping rows near a
+        singularity) and ``blended`` (tasks ramping in or out); the hierarchy's own claim of
+        the lexicographic optimum is :attr:`HierarchyResult.ok` of :attr:`hierarchy`.
+        """
+        return self.status in USABLE_STATUSES
+
+    @property
+    def damped_levels(self) -> tuple[int, ...]:
+        """Indices of the levels damped this tick (empty when none)."""
+        return () if self.damping is None else self.damping.damped_levels
+
+    @property
+    def reversals_per_s(self) -> float | None:
+        """Worst entry's command reversals per second over the last second [1/s], or None.
+
+        Counted on the controller's own commands (:mod:`uvms_qp.controller.history`); None for a
+        scheme that keeps no history.
+        """
+        return None if self.reversals is None else self.reversals.per_s
 
     @property
     def degraded(self) -> bool:
@@ -184,6 +247,19 @@ class StepResult:
                 lines.append(f"    {name:<22} residual {r:.3e} [{ru}]   error {e:.3e} [{eu}]")
         lines.append(f"  zeta = {np.array2string(self.zeta, precision=4, suppress_small=True)}")
         lines.append(f"  hard bound violation {self.bound_violation:.1e}")
+        if self.reversals is not None:
+            lines.append(f"  command reversals {self.reversals.per_s:.3g} /s (worst entry, last "
+                         f"{HISTORY_WINDOW:g} s)")
+        if self.damping is not None:
+            sigma = self.damping.sigma_min
+            lines.append("  damped near a singularity (not the stack's lexicographic optimum): "
+                         + ", ".join(f"level {k} (sigma_min {sigma[k]:.3g})"
+                                     for k in self.damping.damped_levels))
+        if self.inactive:
+            lines.append(f"  out of the stack: {', '.join(self.inactive)}")
+        if self.ramping:
+            lines.append("  ramping (blend of the optima with and without): " + ", ".join(
+                f"{name} at {a:.3g}" for name, a in self.ramping.items()))
         message = self.hierarchy.message if self.hierarchy is not None else ""
         if message:
             lines.append(f"  {message}")

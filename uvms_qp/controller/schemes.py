@@ -17,24 +17,31 @@ guard and post-check (shape, finiteness, hard rows, deadline):
 * :class:`NullspaceScheme` (``"nullspace"``): the closed-form recursive null-space scheme
   (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels, in the metric W of Eq. (17)),
   saturated into the hard box (``StepResult.saturated`` says when that changed the command);
-  its status judges the saturated command against the levels, and hard rows it breaks send the
-  step down the ladder. It has no notion of inequality rows: a stack with inequality tasks is
-  refused at construction.
+  its status judges the saturated command against the levels (``unproven`` when the
+  optimality certificate cannot prove it the optimum of the boxed problem: the command stays
+  the closed form's), and hard rows it breaks send the step down the ladder. It has no notion
+  of inequality rows: a stack with inequality tasks is refused at construction.
 
 The papers' schemes (:mod:`uvms_qp.schemes`) implement the same :class:`Scheme` protocol.
 """
 
 from __future__ import annotations
 
+import math
+from collections import Counter
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
+from .._validation import as_time
 from ..errors import InputError, NoSolutionFound
-from ..hqp import Problem
+from ..hqp import Problem, Status
+from ..hqp.damping import Damping, level_damping
+from ..hqp.measure import clip_to_box, evaluate
 from ..hqp.registry import get_spec
-from ..safety import DEGRADED_STAGES, SafeSolver, default_alternate
+from ..safety import DEGRADED_STAGES, SafeSolve, SafeSolver, default_alternate
+from ..safety.fallback import PRIMARY
 from .assembler import StackAssembler
 from .result import StepResult
 
@@ -73,7 +80,15 @@ def require_equality_tasks(assembler: StackAssembler, who: str) -> None:
 
 
 class _StackScheme:
-    """A scheme that solves the assembled stack through the fallback ladder."""
+    """A scheme that solves the assembled stack through the fallback ladder.
+
+    Every step: the tasks write their rows (:meth:`StackAssembler.fill`); tasks out of the stack
+    (activation 0) leave the problem; the problem goes through the ladder; where a level is near
+    a singularity in the freedom the levels above leave, its damping rows are added and the
+    problem is solved again (:mod:`uvms_qp.hqp.damping`); while tasks ramp in or out
+    (0 < activation < 1) the optima with and without them are blended; the command is handed to
+    the constraints and kept for the reversal figure.
+    """
 
     name: ClassVar[str] = ""
 
@@ -82,34 +97,148 @@ class _StackScheme:
         self.safe = safe
         self.problem = problem
         self.solver_name = safe.name
-        self._fill: Callable[[State, float], Any] = assembler.fill  # the tick's rows
+        self.status_counts: Counter[str] = Counter()
 
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Fill the problem, solve it through the ladder, measure the command.
 
         Raises:
-            InputError: a task whose target was never set, a state of another model, or
-                something other than a State (e.g. a configuration array).
-            NonFiniteError: a task produced NaN/inf rows (the message names the task).
+            InputError: a task whose target was never set, a state of another model, something
+                other than a State (e.g. a configuration array), or a time that is not a real
+                number.
+            NonFiniteError: a task produced NaN/inf rows (the message names the task), or the
+                time is NaN or inf.
             BoundsError: the hard box is empty (the message names the constraints).
             NoSolutionFound: strict mode, and no back-end returned a verified solution.
         """
+        t = as_time(t)
         clock = self.safe.clock
         start = clock()
-        self._fill(state, t)
         assembler = self.assembler
+        assembler.fill(state, t)
+        self._prepare()
+        excluded, ramping = assembler.activation()
         try:
-            out = self.safe.solve(self.problem, start)
+            main, solved, damping = self._solve(excluded, start)
         except NoSolutionFound:
             assembler.check_box(state)
             raise
+        out: SafeSolve = main  # type: ignore[assignment]  # the ladder always answers
         if out.stage in DEGRADED_STAGES:  # e.g. an empty box, which no back-end can answer
             assembler.check_box(state)
-        return assembler.step_result(out, t, clock() - start, self.name, self.solver_name)
+        status = out.result.status if damping is None else Status.DAMPED
+        if ramping and out.solved:
+            blend = self._blend(excluded, ramping, out, solved, start)
+            if blend is not None:  # (a blend with an unproven answer is not proven either)
+                out, status = blend, (Status.BLENDED if out.result.ok else Status.UNPROVEN)
+        self.safe.previous = out.x
+        self.status_counts[status.value] += 1
+        return assembler.step_result(out, t, clock() - start, self.name, self.solver_name,
+                                     status, solved, damping, excluded, ramping)
+
+    def _solve(self, excluded: tuple[int, ...], start: float, ladder: bool = True
+               ) -> tuple[SafeSolve | None, Problem, Damping | None]:
+        """The answer to the stack without ``excluded``, damped where needed.
+
+        The ladder answers the main problem (``ladder``); the other solves of a step (the damped
+        problem, the subsets of a blend) are one verified call of the primary back-end each, and
+        are skipped once the step's deadline has passed.
+
+        Returns:
+            ``(outcome, problem solved, damping or None)``; the outcome is None when a solve
+            without the ladder fails.
+        """
+        assembler = self.assembler
+        problem = (assembler.problem if not excluded
+                   else assembler.derived(excluded, assembler.no_rows))
+        if ladder:
+            out: SafeSolve | None = self.safe.solve(self._scheme_problem(problem), start)
+        else:
+            out = self._verified(problem, None)
+        thresholds = assembler.damping
+        if out is None or thresholds is None or not out.solved or self._late(start):
+            return out, problem, None
+        damping = level_damping(problem, out.x, thresholds, assembler.dt)
+        if not damping.acted:
+            return out, problem, None
+        damped = assembler.derived(excluded, damping.rows)
+        again = self._verified(damped, out)
+        if again is None:  # the back-end failed on the damped problem: keep the undamped answer
+            return (out if ladder else None), problem, None
+        return again, damped, damping
+
+    def _late(self, start: float) -> bool:
+        """The step's deadline has passed (no more optional solves)."""
+        deadline = self.safe.deadline
+        return deadline is not None and self.safe.clock() - start > deadline
+
+    def _verified(self, problem: Problem, main: SafeSolve | None) -> SafeSolve | None:
+        """One verified solve by the primary back-end (no ladder), clipped into the box.
+
+        None when the back-end raises or does not return a verified answer (``optimal`` or
+        ``level_infeasible`` within the hard tolerance); the stage and the ladder's report are
+        those of ``main`` (the primary's, without one).
+        """
+        primary = self.safe.primary
+        try:
+            result = primary.solve_problem(self._scheme_problem(problem))
+        except Exception:  # any back-end exception, ours or foreign: the optional solve fails
+            return None
+        if not result.ok or result.hard_violation > primary.hard_tol * max(
+                1.0, problem.hard_scale):
+            return None
+        x, clipped = clip_to_box(result.x, problem.lower, problem.upper)
+        clipped = max(clipped, float(result.info.get("clipped", 0.0)))  # type: ignore[arg-type]
+        flagged = clipped > self.safe.clip_flag_tol
+        if main is None:
+            return SafeSolve(x, result, PRIMARY, (), clipped, flagged)
+        return SafeSolve(x, result, main.stage, main.attempts, clipped, flagged,
+                         main.deadline_missed, main.relaxed_levels, main.elapsed)
+
+    def _blend(self, excluded: tuple[int, ...], ramping: tuple[int, ...], main: SafeSolve,
+               solved: Problem, start: float) -> SafeSolve | None:
+        """The blend of the optima with and without the ramping tasks, or None.
+
+        ``sum_S prod_i a_i^[i in S] (1 - a_i)^[i not in S] x(S)`` over the subsets ``S`` of the
+        ramping tasks (the continuous activation of Mansard, Khatib and Kheddar 2009, for scalar
+        activations); ``x`` of the full set is ``main``. None when a solve fails.
+        """
+        tasks = self.assembler.tasks
+        a = [tasks[i].activation for i in ramping]
+        x = np.zeros_like(main.x)
+        for mask in range(1 << len(ramping)):
+            weight = math.prod(a[j] if mask >> j & 1 else 1.0 - a[j] for j in range(len(a)))
+            if mask == (1 << len(ramping)) - 1:
+                x += weight * main.x
+                continue
+            out = tuple(sorted(excluded + tuple(i for j, i in enumerate(ramping)
+                                                 if not mask >> j & 1)))
+            if self._late(start):
+                return None
+            other, _, _ = self._solve(out, start, ladder=False)
+            if other is None:
+                return None
+            x += weight * other.x
+        problem = self._scheme_problem(solved)
+        x, _ = clip_to_box(x, problem.lower, problem.upper)  # round-off only: the box is convex
+        primary = self.safe.primary
+        active = ", ".join(f"{tasks[i].name} {tasks[i].activation:.3g}" for i in ramping)
+        result = evaluate(problem, x, Status.BLENDED, main.result.solver,
+                          f"blended: activation {active}", level_tol=primary.level_tol,
+                          hard_tol=primary.hard_tol, solve_time=main.result.solve_time)
+        return SafeSolve(x, result, main.stage, main.attempts, main.clipped, main.clip_flagged,
+                         main.deadline_missed, main.relaxed_levels, main.elapsed)
+
+    def _scheme_problem(self, problem: Problem) -> Problem:
+        """The problem this scheme hands to the ladder for the stack's ``problem``."""
+        return problem
+
+    def _prepare(self) -> None:
+        """Per-tick work of the scheme after the stack is written (none by default)."""
 
     def reset(self) -> None:
-        """Reset every task's run-time memory and the fallback ladder."""
-        self.assembler.stack.reset()
+        """Reset every task's and constraint's run-time memory and the fallback ladder."""
+        self.assembler.reset()
         self.safe.reset()
 
 
@@ -146,18 +275,30 @@ class WeightedScheme(_StackScheme):
         sizes = full.sizes
         super().__init__(assembler, safe, full.regrouped([sum(sizes)]))
         p = len(sizes)
-        self._factors = np.repeat([priority_ratio ** (p - 1 - k) for k in range(p)], sizes)
+        self._level_factors = [priority_ratio ** (p - 1 - k) for k in range(p)]
+        self._factors = np.repeat(self._level_factors, sizes)
         self._version = -1
-        self._fill = self._fill_weighted
+        self._views: dict[Problem, Problem] = {}
 
-    def _fill_weighted(self, state: State, t: float) -> None:
-        """The stack's rows, and the priority weights whenever a row weight changed."""
-        assembler = self.assembler
-        assembler.fill(state, t)
-        version = assembler.weights_version
+    def _prepare(self) -> None:
+        version = self.assembler.weights_version
         if version != self._version:
-            self.problem.set_weights(assembler.problem.w * self._factors)
+            self.problem.set_weights(self.assembler.problem.w * self._factors)
             self._version = version
+
+    def _scheme_problem(self, problem: Problem) -> Problem:
+        """One weighted level for the stack's ``problem`` or a problem derived from it.
+
+        The stack's own keeps its weights current in :meth:`_prepare`; a derived problem gets a
+        view with its rows weighted by their level's factor.
+        """
+        if problem is self.assembler.problem:
+            return self.problem
+        view = self._views.get(problem)
+        if view is None:
+            view = self._views[problem] = problem.regrouped([sum(problem.sizes)])
+        view.set_weights(problem.w * np.repeat(self._level_factors, problem.sizes))
+        return view
 
 
 class NullspaceScheme(_StackScheme):
@@ -169,7 +310,7 @@ class NullspaceScheme(_StackScheme):
                  deadline: float | None, strict: bool, **_: Any) -> None:
         require_equality_tasks(assembler, "scheme 'nullspace'")
         safe = SafeSolver("nullspace", None, options, alternate=default_alternate("nullspace"),
-                          deadline=deadline, strict=strict, saturate=True)
+                          deadline=deadline, strict=strict, saturate=True, accept_unproven=True)
         super().__init__(assembler, safe, assembler.problem)
 
 

@@ -1,67 +1,92 @@
 """Optimality certificate of each level of a lexicographic answer, and its repair.
 
-The problem is the stacked layout shared by every solver (``docs/developer.md``, "Problem"):
+The problem is the stacked layout shared by every solver (:class:`~uvms_qp.hqp.problem.Problem`):
 ``n`` variables, rows ``A = [I_n; A_H; A_0; ...; A_{p-1}]`` of shape (M, n), sides ``lo``, ``hi``
 (``-inf`` / ``+inf`` allowed, equality where ``lo == hi``), ``mh`` hard rows, level sizes and
 level row weights ``w``. Level k's weighted violation is ``f_k(x) = 1/2 sum_i w_i s_i^2`` with
 ``s = A_k x - clip(A_k x, lo_k, hi_k)``; its residual is ``rho_k = sqrt(2 f_k)``.
 
-What a certificate proves. Given an answer ``x`` inside the hard set, level k is optimal when no
-point ``x'`` of the *frozen set* has a smaller ``f_k``: the box and hard rows hold and every row
-of every higher level keeps at most the violation it has at ``x`` (``lo_i - |s_i| <= a_i x' <=
-hi_i + |s_i|``, the lexicographic definition row by row). When a higher level is optimal this is
-exactly the set of points that keep its optimum (its violations are unique), so level-by-level
-certificates prove the lexicographic optimum. ``f_k`` is convex and continuously differentiable
-with gradient ``g = A_k^T (w_k s_k)``, and the frozen set is a polyhedron, so x is optimal iff
-``-g`` lies in the cone of the outward normals of the constraints active at x (one-sided: ``+a``
-at a frozen upper side, ``-a`` at a frozen lower side; a row held at a value, such as an equality
-row met exactly, is active on both sides, i.e. free in sign). The multipliers come from one
-non-negative least-squares solve (:func:`scipy.optimize.nnls`, unit columns):
+**What a certificate proves.** Given an answer ``x`` inside the hard set, level k is optimal when
+no point ``x'`` of its *frozen set* has a smaller ``f_k``: the box and the hard rows hold and
+every row ``i`` of every higher level keeps at most the violation it has at ``x``,
+``lo_i - |s_i| <= a_i x' <= hi_i + |s_i|`` (the lexicographic definition row by row). When a
+higher level is optimal this is exactly the set of points that keep its optimum (its violations
+are unique), so level-by-level certificates prove the lexicographic optimum. ``f_k`` is convex
+with gradient ``g = A_k^T (w_k s_k)`` and the frozen set is a polyhedron, so ``x`` is optimal iff
+``-g`` lies in the cone of the outward normals of the constraints active at ``x`` (``+a`` at a
+frozen upper side, ``-a`` at a frozen lower side, either sign for a row at both, e.g. an
+equality row met exactly).
 
-    lambda = argmin_{lambda >= 0} |g + N lambda|,   r = g + N lambda.
+For any multipliers ``lambda`` (signed: ``lambda_i > 0`` on the upper side of row ``i``, ``< 0``
+on its lower side; the box rows included) and any feasible ``x*``, convexity gives
 
-By Moreau's decomposition ``d = -r`` lies in the tangent cone of the frozen set (a feasible
-direction) and ``g . d = -|r|^2``: when ``r != 0`` it is an improving feasible direction. For any
-feasible ``x*``, convexity gives the a-posteriori bound
+    f_k(x) - f_k(x*) <= sum_j |r_j| (width_j + |s_j|) + sum_i |lambda_i| (delta_i + eps_i) =: df,
 
-    f_k(x) - f_k(x*) <= sum_j |r_j| (upper_j - lower_j) + sum_i mu_i delta_i  =: df
+with ``r = g + A_act' lambda``, ``width_j`` the box width of variable ``j``, ``delta_i`` the
+distance of row ``i`` to the side its multiplier points to and ``eps_i`` the *freeze allowance*
+``freeze_tol * max(1, |a_i x|)`` of a higher level row (0 for the box and hard rows). A variable
+without a box has no width: its part of ``r`` is moved onto the level's own rows instead, with
+multipliers ``w_i s_i + delta_i`` in the dual of the level's least-squares problem (equality rows
+and violated inequality rows, signs kept), which adds ``1/2 sum delta_i^2 / w_i`` to ``df``
+(weak duality; ``delta`` the least-norm change that cancels it, and what is left of ``r`` there
+must be round-off, ``stat_tol`` of the gradient). So
+``rho_k(x) - rho_k* <= rho_k - sqrt(rho_k^2 - 2 df)``. The bound holds for *any* multipliers
+of the right signs: the certificate's soundness does not depend on how they were found. Level
+k is
 
-(``delta_i`` the distance of a constraint counted as active to its side, ``mu_i`` its multiplier),
-so ``rho_k(x) - rho_k* <= min(2 df / rho_k, sqrt(2 df))``. Level k is *certified* when this bound
-is at most ``opt_tol * scale_k`` (``scale_k = max(1, max |finite side of level k|)``), the
-stationarity residual on variables without a finite box is at round-off level
-(``|r_j| <= stat_tol * scale_g``, ``scale_g = sum_i w_i |s_i| |a_i|``), and ``x`` itself lies in
-the box. When the bound is inconclusive (a wide or missing box, an inexact answer), the exact
-optimum ``x+`` of level k over the frozen set is computed by a primal active-set method started
-at ``x`` and certified at round-off; level k is certified when ``rho_k(x) - rho_k(x+) <= opt_tol *
-scale_k``, *improvable* (with ``x+`` as the witness) otherwise, and *unproven* when that solve
-fails. Levels met to ``level_tol * scale_k`` need no certificate (``met``).
+* ``met``: ``rho_k <= level_tol * scale_k`` (``scale_k = max(1, max |finite side of level k|)``);
+* ``certified``: the bound with the allowance is at most ``opt_tol * scale_k``: no point that
+  keeps every higher row within its violation at ``x`` plus ``eps_i`` improves the level by more
+  than ``opt_tol * scale_k``;
+* ``ill_posed``: certified without the allowance but not with it: ``x`` is the optimum of the
+  frozen set, but moving the higher rows by 1e-9 relative could change this level by more than
+  ``opt_tol * scale_k`` (nearly dependent rows across levels, a singular arm): the priorities do
+  not determine the level to the tolerance, and the answer is not called optimal;
+* ``improvable`` (an exact solve found a better point of the frozen set, kept as the witness) or
+  ``unproven`` (neither shown).
 
-Cost: one ``A x`` and a few vectorised comparisons for the whole problem, then one NNLS per unmet
-level on at most ``2 M`` columns of length ``n``; the active-set solve runs only when the bound is
-inconclusive. Measured on the demo stack (n = 10, 31 level rows in 4 levels, box bounds) and on
-random problems in ``benchmarks/bench_certificate.py``.
+**How the multipliers are found.** The best multipliers make ``r`` the projection of ``-g`` on
+the polar of the cone of active normals, i.e. ``-r`` is the steepest feasible descent direction
+``d* = argmin 1/2 |d|^2 + g'd`` subject to ``a_i' d <= 0`` (upper side active), ``>= 0`` (lower
+side active), the box rows as simple bounds (Moreau's decomposition; ``d* = 0`` exactly when
+``x`` is stationary): a least-distance problem (``H = I``), DAQP's own problem class, whose
+multipliers are the ``lambda`` above. One DAQP workspace per problem holds every row above the
+lowest level in place (the rows a controller writes every tick); per answer, one product
+``A x`` gives every distance to a frozen side and one product every unmet level's gradient;
+the levels are then solved from the lowest unmet one up, each switching off the rows of the
+level below it (infinite sides) and handing DAQP its unit gradient (two C calls from an empty
+working set); the bounds of all levels come from a few matrix products. A level these
+multipliers leave unproven gets them once more by non-negative least squares on the same active
+sides (DAQP's dual active set can stall on a degenerate set: more active sides than free
+variables, rows active on both sides). Levels met to tolerance
+cost nothing, and an answer whose levels are all met is not looked at. Measured in
+``benchmarks/bench_certificate.py``.
 
 :func:`repair` starts from an answer whose certificate fails and solves the first failing level
-and every level below it exactly (the same active-set method, frozen sets taken at the current
-point), then certifies the result again.
+and every level below it exactly (:func:`uvms_qp.hqp.kkt.active_set` on each level's frozen set,
+started at the current point), then certifies the result again.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
+from time import perf_counter
+from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import nnls
 
 from .._validation import FloatArray
+from .backends.daqp_binding import DaqpBinding, open_daqp
+from .kkt import active_set
 from .problem import Problem
 
 #: Verdicts of one level.
 MET = "met"
 CERTIFIED = "certified"
+ILL_POSED = "ill_posed"
 IMPROVABLE = "improvable"
 UNPROVEN = "unproven"
 
@@ -69,31 +94,35 @@ UNPROVEN = "unproven"
 LEVEL_TOL = 1e-6
 #: default relative tolerance on the residual gap ``rho_k(x) - rho_k*`` of a certified level
 OPT_TOL = 1e-6
-#: stationarity residual at round-off level, relative to ``scale_g``
+#: freeze allowance of a higher level row, relative to ``max(1, |a_i x|)``
+FREEZE_TOL = 1e-9
+#: what a least-norm solve may leave of the residual on the variables without a box, relative to
+#: the level's gradient (round-off)
 STAT_TOL = 1e-9
-#: relative distance ``act_tol (1 + |side|)`` within which a constraint counts as active
+#: relative distance ``act_tol (1 + |a_i x|)`` within which a side counts as active
 ACT_TOL = 1e-7
 #: relative tolerance on the box and hard rows of an answer (``x`` must be inside)
 HARD_TOL = 1e-9
+#: DAQP's settings for the least-distance problems (H = I needs no proximal term)
+_LDP_SETTINGS = {"primal_tol": 1e-8, "eps_prox": 0.0, "iter_limit": 2000, "time_limit": 0.0}
+_LDP_RETRY = {**_LDP_SETTINGS, "primal_tol": 1e-6}
+_INF = 1e30  # DAQP's infinity
+_KEEP = 8  # workspaces kept (the problems a solver alternates between: full, relaxed)
 
 
-@dataclass(frozen=True, eq=False)
-class LevelCertificate:
-    """The verdict on one level.
+class LevelCertificate(NamedTuple):
+    """The verdict on one level (a named tuple: cheap to make on every control tick).
 
     Attributes:
         level: Level index (0 = highest priority).
-        verdict: ``"met"`` (residual within ``level_tol * scale``), ``"certified"`` (proven
-            within ``opt_tol * scale`` of the best reachable), ``"improvable"`` (a better point
-            of the frozen set is known) or ``"unproven"`` (neither could be shown).
+        verdict: One of ``met``, ``certified``, ``ill_posed``, ``improvable``, ``unproven``
+            (module docstring).
         residual: ``rho_k(x)``, the weighted violation norm at x.
-        stationarity: ``|r|_2``, the distance of ``-g`` to the cone of active normals (0 when
-            met).
-        gap: Upper bound on ``rho_k(x) - rho_k*`` (``inf`` when unknown): the a-posteriori bound,
-            or the exact difference to the certified optimum ``x+``.
-        direction: ``-r``, a feasible direction with ``g . d = -|r|^2`` (None when met).
-        better: ``x+``, the certified optimum of the level over the frozen set, when computed.
-        improvement: ``rho_k(x) - rho_k(x+)`` when ``better`` is known, else 0.
+        stationarity: Largest ``|r_j|`` left after the multipliers (0 when met).
+        gap: Upper bound on ``rho_k(x) - rho_k*`` with the freeze allowance (``inf`` when
+            unknown), or the exact difference to the optimum ``better`` when that was computed.
+        better: The exact optimum of the level over its frozen set, when computed.
+        improvement: ``rho_k(x) - rho_k(better)`` when ``better`` is known, else 0.
     """
 
     level: int
@@ -101,7 +130,6 @@ class LevelCertificate:
     residual: float
     stationarity: float = 0.0
     gap: float = 0.0
-    direction: FloatArray | None = None
     better: FloatArray | None = None
     improvement: float = 0.0
 
@@ -111,9 +139,8 @@ class LevelCertificate:
         return self.verdict in (MET, CERTIFIED)
 
 
-@dataclass(frozen=True, eq=False)
-class Certificate:
-    """Verdicts of every level at one answer.
+class Certificate(NamedTuple):
+    """Verdicts of every level at one answer (a named tuple).
 
     Attributes:
         levels: One :class:`LevelCertificate` per level, highest priority first.
@@ -138,13 +165,35 @@ class Certificate:
                 return c.level
         return None
 
+    @property
+    def ill_posed(self) -> bool:
+        """True when the first level that is not proven is ``ill_posed`` (no solver does better)."""
+        k = self.first_failure
+        return k is not None and self.levels[k].verdict == ILL_POSED
+
+    def reason(self) -> str:
+        """A short sentence for a status message (empty when ``ok``)."""
+        if not self.inside:
+            return "x is not inside the hard set"
+        k = self.first_failure
+        if k is None:
+            return ""
+        c = self.levels[k]
+        if c.verdict == ILL_POSED:
+            return (f"level {k} is ill-posed: a 1e-9 change of the levels above may change its "
+                    f"optimum by more than the tolerance (gap bound {c.gap:.2e})")
+        if c.verdict == IMPROVABLE:
+            return f"level {k} is not optimal (improvable by {c.improvement:.2e})"
+        return f"level {k} is not proven optimal (gap bound {c.gap:.2e})"
+
 
 @dataclass(frozen=True, eq=False)
 class Repair:
     """Outcome of :func:`repair`.
 
     Attributes:
-        x: The repaired point (the input when it was already certified or repair failed).
+        x: The repaired point: certified, or the exact optimum of every level's frozen set whose
+            first unproven level is ill-posed; else the input.
         certificate: Certificate of ``x``.
         repaired: True when ``x`` differs from the input and is certified.
         message: What happened, for a status message.
@@ -156,211 +205,409 @@ class Repair:
     message: str
 
 
-def problem_arrays(problem: Problem) -> tuple[FloatArray, FloatArray, FloatArray, int, int,
-                                             tuple[int, ...], FloatArray]:
-    """The stacked layout ``(A, lo, hi, n, mh, sizes, w)`` of a :class:`Problem` (its buffers)."""
-    return (problem.A, problem.lo, problem.hi, problem.n, problem.mh, problem.sizes,
-            problem.w)
+# ------------------------------------------------------------------------------- slacks
+def slacks(problem: Problem, x: FloatArray) -> FloatArray:
+    """Signed violation ``s = A x - clip(A x, lo, hi)`` of every stacked row."""
+    y = problem.A.dot(x)
+    return y - np.minimum(np.maximum(y, problem.lo), problem.hi)
 
 
-# ------------------------------------------------------------------------------------ certify
-class _Frame:
-    """Everything ``certify`` and ``repair`` measure once per answer.
+def _residuals(problem: Problem, s: FloatArray) -> list[float]:
+    return [math.sqrt(max(v, 0.0)) for v in problem.G[1:].dot(s * s).tolist()]
 
-    The frozen sides of every row are ``lo - |s|`` and ``hi + |s|`` (``s`` its violation at x):
-    for box and hard rows ``s`` is round-off (x is inside), for the rows of a level they keep
-    the violation the level has at x, which is how a higher level constrains a lower one.
+
+def _gap(df: float, rho: float) -> float:
+    """Bound on ``rho - rho*`` from a bound ``df`` on ``f - f*``: ``sqrt(rho^2 - 2 df)``."""
+    if not df < math.inf:
+        return math.inf
+    room = rho * rho - 2.0 * max(df, 0.0)
+    return rho - math.sqrt(room) if room > 0.0 else rho
+
+
+# ---------------------------------------------------------------------- the polar projection
+class _Polar:
+    """DAQP's least-distance workspace of one problem: every row above the lowest level.
+
+    Rows are read in place from the problem's buffer (the box as DAQP's simple bounds); the
+    linear term ``f`` (a level's unit gradient) and the sides ``bu``, ``bl`` (0 on an active
+    side, DAQP's infinity elsewhere) are written per level.
     """
 
-    def __init__(self, A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
-                 sizes: Sequence[int], w: FloatArray, x: FloatArray, act_tol: float,
-                 frozen: _Frame | None = None) -> None:
-        self.A, self.lo, self.hi, self.n, self.mh = A, lo, hi, int(n), int(mh)
-        self.sizes = tuple(int(m) for m in sizes)
-        self.w = w
-        self.head = self.n + self.mh
-        self.starts = np.cumsum((0, *self.sizes))  # level k: rows head + starts[k] .. [k+1]
-        self.x = x
-        y = A @ x
-        self.y = y
-        s = y - np.minimum(np.maximum(y, lo), hi)
-        self.s = s
-        a = np.abs(s)
-        if frozen is None:
-            self.lo_f = lo - a
-            self.hi_f = hi + a
-        else:  # judge this point against another point's frozen set
-            self.lo_f, self.hi_f = frozen.lo_f, frozen.hi_f
-        fin_lo, fin_hi = np.isfinite(lo), np.isfinite(hi)
-        tol_lo = act_tol * (1.0 + np.abs(np.where(fin_lo, lo, 0.0)))
-        tol_hi = act_tol * (1.0 + np.abs(np.where(fin_hi, hi, 0.0)))
-        # outward normal +a where a row sits at its frozen upper side, -a at its lower side
-        self.d_up = np.where(fin_hi, np.maximum(self.hi_f - y, 0.0), np.inf)
-        self.d_dn = np.where(fin_lo, np.maximum(y - self.lo_f, 0.0), np.inf)
-        self.up = self.d_up <= tol_hi
-        self.dn = self.d_dn <= tol_lo
-        self.norms = np.sqrt(np.einsum("ij,ij->i", A, A))
-        self.live = self.norms > 0.0
-        self.width = hi[: self.n] - lo[: self.n]  # inf for a missing side
-        self.boxed = np.isfinite(self.width)
-        hv = float(a[: self.head].max(initial=0.0))
-        self.hard_violation = hv
-
-    def level(self, k: int) -> slice:
-        return slice(self.head + int(self.starts[k]), self.head + int(self.starts[k + 1]))
-
-    def residual(self, k: int) -> float:
-        sl = self.level(k)
-        sk = self.s[sl]
-        return math.sqrt(float(self.w[self.starts[k]: self.starts[k + 1]] @ (sk * sk)))
-
-    def scale(self, k: int) -> float:
-        sl = self.level(k)
-        sides = np.concatenate((self.lo[sl], self.hi[sl]))
-        sides = sides[np.isfinite(sides)]
-        return max(1.0, float(np.abs(sides).max(initial=0.0)))
+    def __init__(self, problem: Problem, binding: DaqpBinding) -> None:
+        n = problem.n
+        self.m = m = problem.spans[-1][0]
+        self.f = np.zeros(n)
+        self.bu = np.full(m, _INF)
+        self.bl = np.full(m, -_INF)
+        self.binding = binding
+        flag, _ = binding.setup(np.eye(n), self.f, problem.A[n:m], self.bu, self.bl,
+                                np.zeros(m, dtype=np.intc), np.zeros(0, dtype=np.intc))
+        self.ok = flag >= 0
+        if self.ok:
+            binding.settings = _LDP_SETTINGS
 
 
-def _stationarity(fr: _Frame, k: int) -> tuple[FloatArray, float, float]:
-    """NNLS multipliers of level k's gradient on the active normals above it.
+class Certifier:
+    """The run-time optimality certificate (module docstring), one callable per solver.
 
-    Returns:
-        ``(r, df, scale_g)``: the residual ``g + N lambda``, the convexity bound
-        ``sum_i mu_i delta_i`` of the constraints counted as active (the box-width part is added
-        by the caller), and the magnitude ``sum_i w_i |s_i| |a_i| + sum_i lambda_i`` of the
-        terms that cancel in ``r`` (round-off scale).
-    """
-    sl = fr.level(k)
-    ws = fr.w[fr.starts[k]: fr.starts[k + 1]] * fr.s[sl]
-    g = fr.A[sl].T @ ws
-    scale_g = float(np.abs(ws) @ fr.norms[sl])
-    P = sl.start  # constraint rows: box, hard rows and every higher level
-    live = fr.live[:P]
-    up = np.flatnonzero(live & fr.up[:P])
-    dn = np.flatnonzero(live & fr.dn[:P])
-    if not up.size + dn.size:
-        return g, 0.0, scale_g
-    idx = np.concatenate((up, dn))
-    nrm = fr.norms[idx]
-    sign = np.concatenate((1.0 / nrm[: up.size], -1.0 / nrm[up.size:]))
-    N = fr.A[idx].T * sign  # unit outward normals as columns
-    lam, _ = nnls(N, -g, maxiter=max(50, 10 * idx.size))
-    r = g + N @ lam
-    mu = lam / nrm  # multipliers of the raw rows
-    df = float(mu[: up.size] @ fr.d_up[up] + mu[up.size:] @ fr.d_dn[dn])
-    return r, df, scale_g + float(lam.sum())
-
-
-def certify(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
-            sizes: Sequence[int], w: FloatArray, x: FloatArray, *,
-            level_tol: float = LEVEL_TOL, opt_tol: float = OPT_TOL, stat_tol: float = STAT_TOL,
-            act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL, exact: bool = True,
-            keep: Sequence[LevelCertificate] = ()) -> Certificate:
-    """Prove each level of ``x`` optimal, or find how to improve it (see the module docstring).
+    ``certifier(problem, x, s, residuals) -> Certificate``; keeps one DAQP workspace per
+    problem it has seen (the last few).
 
     Args:
-        A: Stacked rows ``[I_n; A_H; A_0; ...]``, shape (M, n).
-        lo: Lower sides, shape (M,), ``-inf`` allowed.
-        hi: Upper sides, shape (M,), ``+inf`` allowed; ``lo == hi`` marks an equality row.
-        n: Number of variables.
-        mh: Number of hard rows.
-        sizes: Rows per level, highest priority first.
-        w: Positive level row weights, shape (sum sizes,).
-        x: The answer, shape (n,).
         level_tol: Relative tolerance deciding that a level is met.
         opt_tol: Relative tolerance on ``rho_k(x) - rho_k*`` of a certified level.
-        stat_tol: Round-off level of the stationarity residual (relative to the gradient's
-            terms) on variables without a finite box, and of the exact optimum's certificate.
-        act_tol: Relative distance within which a constraint counts as active (any value is
-            sound: the bound charges ``mu_i delta_i`` for it).
+        freeze_tol: Freeze allowance of higher level rows, relative to ``max(1, |a_i x|)``.
+        stat_tol: Round-off left of the residual on variables without a box, relative to the
+            level's gradient.
+        act_tol: Relative distance within which a side counts as active (any value is sound:
+            the bound charges ``|lambda_i| delta_i`` for it).
         hard_tol: Relative tolerance of the box and hard rows.
-        exact: Resolve inconclusive bounds with the exact level optimum (an active-set solve);
-            False reports them as unproven.
-        keep: Verdicts carried over for the first ``len(keep)`` levels (their residuals are
-            measured again): for a point that no row of those levels violates more than the
-            point they were proven at, as :func:`repair` produces, they still hold.
+
+    Attributes:
+        open_binding: Makes the DAQP binding of each workspace (default
+            :func:`~uvms_qp.hqp.backends.daqp_binding.open_daqp`).
+    """
+
+    def __init__(self, level_tol: float = LEVEL_TOL, opt_tol: float = OPT_TOL,
+                 freeze_tol: float = FREEZE_TOL, stat_tol: float = STAT_TOL,
+                 act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL) -> None:
+        self.level_tol, self.opt_tol, self.freeze_tol = level_tol, opt_tol, freeze_tol
+        self.stat_tol, self.act_tol, self.hard_tol = stat_tol, act_tol, hard_tol
+        self.open_binding: Callable[[], DaqpBinding] = open_daqp
+        self._polars: dict[Problem, _Polar] = {}
+
+    def reset(self) -> None:
+        """Forget every workspace."""
+        self._polars.clear()
+
+    def _polar(self, problem: Problem) -> _Polar:
+        polar = self._polars.get(problem)
+        if polar is None:
+            polar = _Polar(problem, self.open_binding())
+            if len(self._polars) >= _KEEP:
+                self._polars.pop(next(iter(self._polars)))
+            self._polars[problem] = polar
+        return polar
+
+    def __call__(self, problem: Problem, x: FloatArray, s: FloatArray | None = None,
+                 residuals: list[float] | None = None, hard_violation: float | None = None
+                 ) -> Certificate:
+        """The certificate of every level of ``x`` (see the module docstring).
+
+        Args:
+            problem: The problem (its buffers are read, never written).
+            x: The answer, shape (n,).
+            s: ``slacks(problem, x)`` when the caller has them (the measurement's).
+            residuals: The level residuals ``rho_k`` when the caller has them.
+            hard_violation: ``max |s|`` over the box and hard rows when the caller has it.
+        """
+        n, p = problem.n, len(problem.sizes)
+        x = np.asarray(x, dtype=np.float64)
+        if x.shape != (n,) or not math.isfinite(float(x.dot(x))):
+            return Certificate(tuple(LevelCertificate(k, UNPROVEN, math.inf, math.inf, math.inf)
+                                     for k in range(p)), math.inf, False)
+        if s is None:
+            s = slacks(problem, x)
+        if residuals is None:
+            residuals = _residuals(problem, s)
+        head, spans, level_tol = problem.head, problem.spans, self.level_tol
+        hv = float(np.abs(s[:head]).max(initial=0.0)) if hard_violation is None else (
+            hard_violation)
+        inside = hv <= self.hard_tol or hv <= self.hard_tol * problem.hard_scale
+        unmet, scales = [], []
+        for k, r in enumerate(residuals):
+            if r > level_tol:
+                scale = problem.scale(*spans[k])
+                if r > level_tol * scale:
+                    unmet.append(k)
+                    scales.append(scale)
+        if not unmet:
+            return Certificate(tuple(LevelCertificate(k, MET, r)
+                                     for k, r in enumerate(residuals)), hv, inside)
+        verdicts = self._levels(problem, x, s, residuals, unmet, scales)
+        out = [verdicts.get(k) or LevelCertificate(k, MET, r) for k, r in enumerate(residuals)]
+        return Certificate(tuple(out), hv, inside)
+
+    def _levels(self, problem: Problem, x: FloatArray, s: FloatArray, residuals: list[float],
+                unmet: list[int], scales: list[float]) -> dict[int, LevelCertificate]:
+        """Verdicts of the unmet levels (the module docstring's bound, multipliers by DAQP)."""
+        n, head, spans = problem.n, problem.head, problem.spans
+        end = spans[unmet[-1]][0]  # constraint rows: everything above the lowest unmet level
+        A = problem.A
+        Ae = A[:end]
+        y = Ae.dot(x)
+        ay = np.abs(y)
+        a = np.abs(s[:end])
+        # distances to the frozen sides, [lower; upper] (inf where a side is missing)
+        D = np.subtract(y, problem.sides[:, :end])
+        D *= problem.signs[:, :end]
+        D += a
+        tol = ay * self.act_tol
+        tol += self.act_tol
+        act = tol >= D
+        # every unmet level's gradient, and the size that makes it a unit vector for DAQP
+        WS = problem.G[[k + 1 for k in unmet]]
+        WS *= s
+        grads = WS.dot(A)
+        size = np.sqrt(np.einsum("ij,ij->i", grads, grads))
+        np.maximum(size, 1e-300, out=size)
+        polar = self._polar(problem)
+        u = len(unmet)
+        LAM = np.zeros((u, end))
+        solved = [False] * u
+        if polar.ok:
+            # the active sides of every row above the lowest unmet level; the levels from the
+            # lowest up, each switching off the rows of the level below it
+            f, bu, bl, binding = polar.f, polar.bu, polar.bl, polar.binding
+            bu[:end] = np.where(act[1], 0.0, _INF)
+            bl[:end] = np.where(act[0], 0.0, -_INF)
+            bu[end:] = _INF
+            bl[end:] = -_INF
+            top = end
+            for i in range(u - 1, -1, -1):
+                start = spans[unmet[i]][0]
+                bu[start:top] = _INF
+                bl[start:top] = -_INF
+                top = start
+                np.divide(grads[i], size[i], out=f)
+                solved[i] = binding.solve_cold(i == u - 1) == 1
+                if not solved[i]:
+                    # DAQP can call a degenerate set of active rows (more than the free
+                    # variables, nearly dependent) infeasible at a tight tolerance; a looser one
+                    # only loosens the multipliers, which the bound then charges
+                    binding.settings = _LDP_RETRY
+                    solved[i] = binding.solve_cold(False) == 1
+                    binding.settings = _LDP_SETTINGS
+                if solved[i]:  # (a failed solve leaves DAQP's multipliers as they were)
+                    LAM[i, :start] = binding.lam[:start]
+        LAM *= size[:, None]
+        width = problem.hi[:n] - problem.lo[:n]
+        width += a[:n]
+        boxed = bool(math.isfinite(float(width.sum())))  # every variable has a finite box
+        unboxed = None if boxed else ~(width < math.inf)
+        if unboxed is not None:
+            width = np.where(unboxed, 0.0, width)
+        bound = _Bound(Ae, grads, act, np.where(act, D, 0.0), width, np.maximum(ay, 1.0), head,
+                       self.freeze_tol)
+        R, _, df_act, freeze = bound(LAM)
+        absR = np.abs(R)
+        df = absR.dot(width)
+        df += df_act
+        stat = absR.max(axis=1).tolist()
+        # a residual on a variable without a box is not bounded by a width: such a level is
+        # settled by the level's own dual below
+        loose: list[bool] = [False] * len(unmet)
+        if unboxed is not None:
+            loose = [bool(v) for v in np.any(absR[:, unboxed] > 0.0, axis=1).tolist()]
+        dfl, frl = df.tolist(), freeze.tolist()
+        out = {}
+        opt_tol = self.opt_tol
+        for i, k in enumerate(unmet):
+            rho, tol_k = residuals[k], opt_tol * scales[i]
+            verdict, gap = _verdict(dfl[i], frl[i], loose[i], rho, tol_k)
+            if verdict == UNPROVEN:
+                # the multipliers again by non-negative least squares on the same active sides
+                # (DAQP's are accurate to its primal tolerance only, and its dual active set
+                # can stall on a degenerate set: more active rows than free variables, rows
+                # active on both sides); an unboxed residual left is then moved onto the
+                # level's own rows
+                R2, _, act2, fr2 = bound(_nnls(Ae, grads[i], act, spans[k][0]), [i])
+                r, extra = R2[0], 0.0
+                if unboxed is not None:
+                    r, extra = _unboxed_dual(problem, k, s, r, unboxed)
+                verdict2, gap2 = UNPROVEN, math.inf
+                if r is not None:
+                    ar = np.abs(r)
+                    loose2 = unboxed is not None and bool(
+                        (ar[unboxed] > self.stat_tol * float(np.abs(grads[i]).max())).any())
+                    # (what the least-norm solve leaves: round-off, or a direction off the
+                    # level's rows, which no dual of the level can absorb)
+                    verdict2, gap2 = _verdict(float(ar.dot(width)) + float(act2[0]) + extra,
+                                              float(fr2[0]), loose2, rho, tol_k)
+                if gap2 < gap:
+                    verdict, gap, stat[i] = verdict2, gap2, float(np.abs(r).max())
+            out[k] = LevelCertificate(k, verdict, rho, stat[i], gap)
+        return out
+
+
+class _Bound:
+    """The module docstring's bound for rows of multipliers (one row per unmet level).
+
+    Args:
+        Ae: Constraint rows (box, hard, levels above the lowest unmet one), shape (m, n).
+        grads: Gradients of the unmet levels, shape (u, n).
+        act: Rows whose [lower; upper] frozen side is active, shape (2, m).
+        dist: Distances to the frozen sides where active (0 elsewhere), ``[lower; upper]``.
+        width: Box width plus the box slack of each variable (0 where unboxed), shape (n,).
+        big: ``max(1, |a_i x|)`` of each row, shape (m,).
+        head: Box and hard rows (no freeze allowance).
+        freeze_tol: The freeze allowance relative to ``big``.
+    """
+
+    def __init__(self, Ae: FloatArray, grads: FloatArray, act: np.ndarray, dist: FloatArray,
+                 width: FloatArray, big: FloatArray, head: int, freeze_tol: float) -> None:
+        self.Ae, self.grads, self.act, self.dist, self.width = Ae, grads, act, dist, width
+        self.big, self.head, self.freeze_tol = big, head, freeze_tol
+
+    def __call__(self, LAM: FloatArray, rows: list[int] | None = None
+                 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """``(r, signed multipliers, sum |lambda_i| delta_i, freeze allowance)`` per row of LAM.
+
+        Multipliers of the wrong sign are dropped first (any multipliers of the right signs give
+        a valid bound). ``rows`` picks the levels the rows of ``LAM`` belong to (default all).
+        """
+        grads = self.grads if rows is None else self.grads[rows]
+        act, dist, head = self.act, self.dist, self.head
+        pos = LAM > 0.0
+        L = LAM * np.where(pos, act[1], act[0])  # a multiplier only on an active side
+        absL = np.abs(L)
+        R = L.dot(self.Ae)
+        R += grads
+        df_act = np.einsum("ij,ij->i", absL, np.where(pos, dist[1], dist[0]))
+        freeze = absL[:, head:].dot(self.big[head:])
+        freeze *= self.freeze_tol
+        return R, L, df_act, freeze
+
+
+def _nnls(Ae: FloatArray, g: FloatArray, act: np.ndarray, start: int) -> FloatArray:
+    """Signed multipliers (1, m) of ``min |g + A' lambda|`` on the active sides of rows < start.
+
+    One :func:`scipy.optimize.nnls` on unit columns (``+a`` at an upper side, ``-a`` at a lower
+    one).
+    """
+    up = np.flatnonzero(act[1, :start])
+    dn = np.flatnonzero(act[0, :start])
+    lam = np.zeros((1, Ae.shape[0]))
+    if not up.size + dn.size:
+        return lam
+    rows = np.concatenate((up, dn))
+    norms = np.sqrt(np.einsum("ij,ij->i", Ae[rows], Ae[rows]))
+    live = norms > 0.0
+    rows, norms = rows[live], norms[live]
+    sign = np.where(np.arange(live.size)[live] < up.size, 1.0, -1.0)
+    coef, _ = nnls((Ae[rows] * (sign / norms)[:, None]).T, -g, maxiter=50 * max(rows.size, 10))
+    np.add.at(lam[0], rows, sign * coef / norms)
+    return lam
+
+
+def _unboxed_dual(problem: Problem, k: int, s: FloatArray, r: FloatArray, unboxed: np.ndarray
+                  ) -> tuple[FloatArray | None, float]:
+    """Move the residual ``r`` on the unboxed variables onto level k's own multipliers.
+
+    The level's QP dual: with multipliers ``mu = w s + delta`` on its rows (equality rows and
+    violated inequality rows, signs kept), the duality gap grows by ``1/2 sum delta_i^2 / w_i``
+    and the residual becomes ``r + A_k' delta``. ``delta`` is the least such change that makes
+    the unboxed part vanish (a weighted least-norm solve); None when that leaves the unboxed
+    part (the level can be improved along a direction no box limits) or flips a sign.
+
+    Returns:
+        ``(new residual or None, the gap's increase in f)``.
+    """
+    a0, b0 = problem.spans[k]
+    h = problem.head
+    Ak, w, sk = problem.A[a0:b0], problem.w[a0 - h:b0 - h], s[a0:b0]
+    # equality rows, and inequality rows violated by more than round-off (a row at its side
+    # to round-off keeps multiplier 0)
+    rows = (problem.lo[a0:b0] == problem.hi[a0:b0]) | (
+        np.abs(sk) > 1e-12 * problem.scale(a0, b0))
+    if not rows.any():
+        return None, math.inf
+    root = np.sqrt(w[rows])
+    M = Ak[rows][:, unboxed].T * root
+    z = np.linalg.lstsq(M, -r[unboxed], rcond=None)[0]
+    delta = root * z
+    ineq = (problem.lo[a0:b0] != problem.hi[a0:b0])[rows]
+    mu = w[rows] * sk[rows]
+    if ((mu[ineq] + delta[ineq]) * mu[ineq] < 0.0).any():
+        return None, math.inf  # an inequality row's multiplier would change side
+    r2 = r + delta.dot(Ak[rows])
+    return r2, 0.5 * float(z.dot(z))
+
+
+def _verdict(df: float, freeze: float, loose: bool, rho: float, tol: float
+             ) -> tuple[str, float]:
+    """Verdict and gap bound of one level from its ``df`` and freeze allowance."""
+    if loose:
+        return UNPROVEN, math.inf
+    gap = _gap(df + freeze, rho)
+    if gap <= tol:
+        return CERTIFIED, gap
+    return (ILL_POSED if _gap(df, rho) <= tol else UNPROVEN), gap
+
+
+# ------------------------------------------------------------------------------- certify
+def certify(problem: Problem, x: FloatArray, s: FloatArray | None = None,
+            residuals: list[float] | None = None, *, level_tol: float = LEVEL_TOL,
+            opt_tol: float = OPT_TOL, freeze_tol: float = FREEZE_TOL,
+            stat_tol: float = STAT_TOL, act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL,
+            exact: bool = False, deadline: float | None = None) -> Certificate:
+    """Prove each level of ``x`` optimal, or say why not (see the module docstring).
+
+    A one-off :class:`Certifier` (a solver keeps its own, with its DAQP workspaces).
+
+    Args:
+        problem: The problem (its buffers are read, never written).
+        x: The answer, shape (n,).
+        s: ``slacks(problem, x)`` when the caller has them.
+        residuals: The level residuals ``rho_k`` when the caller has them.
+        level_tol: Relative tolerance deciding that a level is met.
+        opt_tol: Relative tolerance on ``rho_k(x) - rho_k*`` of a certified level.
+        freeze_tol: Freeze allowance of higher level rows, relative to ``max(1, |a_i x|)``.
+        stat_tol: Round-off left of the residual on variables without a box.
+        act_tol: Relative distance within which a side counts as active.
+        hard_tol: Relative tolerance of the box and hard rows.
+        exact: Settle a level the multipliers cannot certify with its exact optimum over the
+            frozen set (``improvable`` with the witness, or ``certified``); False leaves it
+            ``unproven`` (the run-time path, whose repair does the exact solves).
+        deadline: ``time.perf_counter()`` value after which exact solves give up.
 
     Returns:
         The :class:`Certificate`; levels are judged against the frozen set at ``x`` whatever
         the verdicts above them.
     """
+    cert = Certifier(level_tol, opt_tol, freeze_tol, stat_tol, act_tol, hard_tol)(
+        problem, x, s, residuals)
+    if not exact or cert.ok or not cert.inside:
+        return cert
     x = np.asarray(x, dtype=np.float64)
-    p = len(sizes)
-    if x.shape != (n,) or not np.all(np.isfinite(x)):
-        return Certificate(tuple(LevelCertificate(k, UNPROVEN, math.inf, math.inf, math.inf)
-                                 for k in range(p)), math.inf, False)
-    fr = _Frame(A, lo, hi, n, mh, sizes, w, x, act_tol)
-    sides = np.concatenate((lo[: fr.head], hi[: fr.head]))
-    hard_scale = max(1.0, float(np.abs(sides[np.isfinite(sides)]).max(initial=0.0)))
-    inside = fr.hard_violation <= hard_tol * hard_scale
-    out = []
-    for k in range(p):
-        rho = fr.residual(k)
-        scale = fr.scale(k)
-        if k < len(keep):
-            c = keep[k]
-            out.append(LevelCertificate(k, c.verdict, rho, c.stationarity, c.gap))
-            continue
-        if rho <= level_tol * scale:
-            out.append(LevelCertificate(k, MET, rho))
-            continue
-        out.append(_certify_level(fr, k, rho, scale, opt_tol, stat_tol, exact))
-    return Certificate(tuple(out), fr.hard_violation, bool(inside))
-
-
-def _gap(df: float, rho: float) -> float:
-    """Bound on ``rho - rho*`` from a bound ``df`` on ``f - f*`` (``f = rho^2 / 2``)."""
-    if not math.isfinite(df):
-        return math.inf
-    df = max(df, 0.0)
-    return min(2.0 * df / rho, math.sqrt(2.0 * df)) if rho > 0.0 else math.sqrt(2.0 * df)
-
-
-def _certify_level(fr: _Frame, k: int, rho: float, scale: float, opt_tol: float,
-                   stat_tol: float, exact: bool) -> LevelCertificate:
-    r, df_act, scale_g = _stationarity(fr, k)
-    nr = float(np.linalg.norm(r))
-    rb = np.abs(r[: fr.n])
-    unboxed = ~fr.boxed
-    round_off = stat_tol * max(scale_g, 1e-300)
-    if unboxed.any() and float(rb[unboxed].max()) > round_off:
-        df = math.inf
-    else:
-        df = float(rb[fr.boxed] @ fr.width[fr.boxed]) + df_act
-    gap = _gap(df, rho)
-    if gap <= opt_tol * scale:
-        return LevelCertificate(k, CERTIFIED, rho, nr, gap, -r)
-    if not exact:
-        return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
-    better = _level_optimum(fr, k)
-    if better is None:
-        return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
-    sub = _Frame(fr.A, fr.lo, fr.hi, fr.n, fr.mh, fr.sizes, fr.w, better, 1e-9, frozen=fr)
-    # x+ must keep the frozen set of x and be stationary at round-off on its own active set
-    if not _keeps_frozen(fr, sub, k):
-        return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
-    r_plus, _, scale_plus = _stationarity(sub, k)
-    if float(np.abs(r_plus).max(initial=0.0)) > max(stat_tol, 1e-12) * 1e3 * max(scale_plus,
-                                                                                  1e-300):
-        return LevelCertificate(k, UNPROVEN, rho, nr, gap, -r)
-    diff = rho - sub.residual(k)
-    if diff <= opt_tol * scale:
-        return LevelCertificate(k, CERTIFIED, rho, nr, max(diff, 0.0), -r, better,
-                                max(diff, 0.0))
-    return LevelCertificate(k, IMPROVABLE, rho, nr, diff, -r, better, diff)
-
-
-def _keeps_frozen(fr: _Frame, sub: _Frame, k: int, tol: float = 1e-9) -> bool:
-    """True when ``sub.x`` lies in the frozen set of level k taken at ``fr.x`` (to ``tol``)."""
-    P = fr.level(k).start
-    y = sub.y[:P]
-    rel = tol * (1.0 + np.abs(fr.y[:P]))
-    return bool(np.all((y <= fr.hi_f[:P] + rel) & (y >= fr.lo_f[:P] - rel)))
+    levels = []
+    for c in cert.levels:
+        if not c.ok and c.verdict != ILL_POSED:
+            scale = problem.scale(*problem.spans[c.level])
+            c = _settle(problem, x, c, opt_tol, scale, deadline)
+        levels.append(c)
+    return Certificate(tuple(levels), cert.hard_violation, cert.inside)
 
 
 # ------------------------------------------------------------------------ exact level solves
-def _level_qp(fr: _Frame, k: int) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray,
-                                           FloatArray, FloatArray, FloatArray]:
+class _Frozen:
+    """The frozen set of every row at ``x`` (exact solves; not the run-time path)."""
+
+    def __init__(self, problem: Problem, x: FloatArray) -> None:
+        self.problem, self.x = problem, x
+        y = problem.A.dot(x)
+        s = y - np.minimum(np.maximum(y, problem.lo), problem.hi)
+        a = np.abs(s)
+        self.y, self.s = y, s
+        self.lo_f, self.hi_f = problem.lo - a, problem.hi + a
+        self.norms = np.sqrt(np.einsum("ij,ij->i", problem.A, problem.A))
+
+    def residual(self, k: int) -> float:
+        a, b = self.problem.spans[k]
+        h = self.problem.head
+        sk = self.s[a:b]
+        return math.sqrt(float(self.problem.w[a - h:b - h].dot(sk * sk)))
+
+    def keeps(self, other: _Frozen, k: int, tol: float = 1e-9) -> bool:
+        """True when ``other.x`` lies in the frozen set of level k taken here (to ``tol``)."""
+        P = self.problem.spans[k][0]
+        y = other.y[:P]
+        rel = tol * (1.0 + np.abs(self.y[:P]))
+        return bool(np.all((y <= self.hi_f[:P] + rel) & (y >= self.lo_f[:P] - rel)))
+
+
+def _level_qp(fr: _Frozen, k: int) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray,
+                                              FloatArray, FloatArray, FloatArray]:
     """Level k's QP over ``z = [x; t]`` on the frozen set at ``fr.x``.
 
     ``min 1/2 z' H z + c' z`` with ``H = diag(A_e' W_e A_e, W_i)``, ``c = [-A_e' W_e b; 0]``
@@ -370,23 +617,25 @@ def _level_qp(fr: _Frame, k: int) -> tuple[FloatArray, FloatArray, FloatArray, F
     sides of every other box, hard and higher-level row, level k's inequality rows). Every
     constraint row is normalised. Returns ``(H, c, E, e, G, h, z0)``.
     """
-    n = fr.n
-    sl = fr.level(k)
-    Ak, lok, hik = fr.A[sl], fr.lo[sl], fr.hi[sl]
-    wk = fr.w[fr.starts[k]: fr.starts[k + 1]]
+    problem = fr.problem
+    n, head = problem.n, problem.head
+    a, b = problem.spans[k]
+    Ak, lok, hik = problem.A[a:b], problem.lo[a:b], problem.hi[a:b]
+    wk = problem.w[a - head:b - head]
     eqk = lok == hik
     ine = np.flatnonzero(~eqk)
     q = ine.size
+    # rows scaled by sqrt(w): H keeps the weights without squaring their spread twice
     Ae, be, we = Ak[eqk], lok[eqk], wk[eqk]
     H = np.zeros((n + q, n + q))
-    H[:n, :n] = Ae.T @ (we[:, None] * Ae)
+    H[:n, :n] = Ae.T.dot(we[:, None] * Ae)
     H[n:, n:] = np.diag(wk[ine])
     c = np.zeros(n + q)
-    c[:n] = -Ae.T @ (we * be)
-    P = sl.start
-    live = fr.live[:P]
+    c[:n] = -Ae.T.dot(we * be)
+    P = a
+    live = fr.norms[:P] > 0.0
     lo_f, hi_f, nrm = fr.lo_f[:P], fr.hi_f[:P], fr.norms[:P]
-    unit = fr.A[:P] / np.where(live, nrm, 1.0)[:, None]
+    unit = problem.A[:P] / np.where(live, nrm, 1.0)[:, None]
     pinned = lo_f == hi_f
     pin = np.flatnonzero(live & pinned)
     E = np.hstack((unit[pin], np.zeros((pin.size, q))))
@@ -407,137 +656,79 @@ def _level_qp(fr: _Frame, k: int) -> tuple[FloatArray, FloatArray, FloatArray, F
             h_rows.append(sign * side[cut] / ni[cut])
     G = np.vstack(G_rows)
     h = np.concatenate(h_rows)
-    z0 = np.concatenate((fr.x, fr.s[sl][ine]))
+    z0 = np.concatenate((fr.x, fr.s[a:b][ine]))
     return H, c, E, e, G, h, z0
 
 
-def _level_optimum(fr: _Frame, k: int) -> FloatArray | None:
-    """Exact optimum of level k over the frozen set at ``fr.x`` (None when the solve fails)."""
-    H, c, E, e, G, h, z0 = _level_qp(fr, k)
-    z = active_set(H, c, E, e, G, h, z0)
-    return None if z is None else z[: fr.n]
+def level_optimum(problem: Problem, x: FloatArray, k: int, deadline: float | None = None,
+                  clock: Callable[[], float] = perf_counter) -> FloatArray | None:
+    """Exact optimum of level k over its frozen set at ``x`` (None when the solve fails).
 
-
-def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: FloatArray,
-               h: FloatArray, z0: FloatArray, max_iter: int | None = None,
-               tight: float = 1e-9) -> FloatArray | None:
-    """Primal active-set solve of ``min 1/2 z'Hz + c'z  s.t.  E z = e, G z <= h`` from ``z0``.
-
-    The textbook method (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 16.3) from
-    a feasible start: each iteration solves the equality-constrained QP on the equalities and
-    the working set (its KKT system by least squares, so a singular ``H`` and dependent rows
-    are harmless, and the step lands exactly on the working constraints), then steps to the
-    first blocking constraint, or releases the working constraint with the most negative
-    multiplier (a working set seen before is never entered again, which stops cycling on
-    degenerate vertices). Rows of ``E`` and ``G`` are expected normalised.
-
-    Args:
-        H: Positive semi-definite Hessian, shape (m, m).
-        c: Linear term, shape (m,).
-        E: Equality rows, shape (p, m).
-        e: Their values, shape (p,).
-        G: Inequality rows, shape (q, m).
-        h: Their sides, shape (q,).
-        z0: Start, feasible to ``tight (1 + |side|)`` (None is returned otherwise).
-        max_iter: Iteration cap (default ``10 (m + q) + 50``).
-        tight: Relative slack below which an inequality starts in the working set.
-
-    Returns:
-        The stationary point with non-negative multipliers, or None (infeasible start, no
-        progress, iteration cap).
+    One :func:`uvms_qp.hqp.kkt.active_set` solve started at ``x`` (feasible by construction);
+    the answer is clipped into the box (the steps land on it to round-off). ``deadline`` is a
+    reading of ``clock`` [s] after which the solve gives up.
     """
-    m = z0.size
-    rel = 1.0 + np.abs(h)
-    z = np.asarray(z0, dtype=np.float64).copy()
-    if np.any(G @ z - h > 1e-7 * rel) or np.any(np.abs(E @ z - e) > 1e-7 * (1.0 + np.abs(e))):
+    fr = _Frozen(problem, np.asarray(x, dtype=np.float64))
+    H, c, E, e, G, h, z0 = _level_qp(fr, k)
+    # from a feasible, usually nearly optimal start: a few exchanges of the working set; the
+    # cap keeps a degenerate case from grinding (it fails, and is reported unproven)
+    z = active_set(H, c, E, e, G, h, z0, max_iter=3 * z0.size + 20,
+                   deadline=deadline, clock=clock)
+    if z is None:
         return None
-    work = h - G @ z <= tight * rel
-    seen = {work.tobytes()}
-    pe = E.shape[0]
-    for _ in range(max_iter or 10 * (m + G.shape[0]) + 50):
-        C = np.vstack((E, G[work]))
-        mc = C.shape[0]
-        K = np.block([[H, C.T], [C, np.zeros((mc, mc))]])
-        rhs = np.concatenate((-(H @ z + c), e - E @ z, h[work] - G[work] @ z))
-        sol = np.linalg.lstsq(K, rhs, rcond=1e-14)[0]
-        if not np.all(np.isfinite(sol)):
-            return None
-        p, mu = sol[:m], sol[m + pe:]
-        if np.abs(p).max(initial=0.0) <= 1e-13 * max(1.0, float(np.abs(z).max(initial=0.0))):
-            z = z + p
-            if not mu.size or mu.min() >= -1e-12 * max(1.0, float(np.abs(mu).max())):
-                return z
-            idx = np.flatnonzero(work)
-            for j in np.argsort(mu):
-                if mu[j] >= 0.0:
-                    return z
-                trial = work.copy()
-                trial[idx[j]] = False
-                if trial.tobytes() not in seen:
-                    work = trial
-                    seen.add(trial.tobytes())
-                    break
-            else:
-                return z
-            continue
-        Gp = G @ p
-        slack = np.maximum(h - G @ z, 0.0)
-        block = ~work & (Gp > 1e-14 * rel)
-        alpha, hit = 1.0, -1
-        if block.any():
-            ratios = np.full(G.shape[0], np.inf)
-            ratios[block] = slack[block] / Gp[block]
-            hit = int(np.argmin(ratios))
-            if ratios[hit] < 1.0:
-                alpha = float(ratios[hit])
-            else:
-                hit = -1
-        z = z + alpha * p
-        if hit >= 0:
-            work = work.copy()
-            work[hit] = True
-            seen.add(work.tobytes())
-    return None
+    return np.minimum(np.maximum(z[:problem.n], problem.lower), problem.upper)
+
+
+def _settle(problem: Problem, x: FloatArray, c: LevelCertificate, opt_tol: float, scale: float,
+            deadline: float | None) -> LevelCertificate:
+    """The exact verdict on level k: the optimum of its frozen set, compared with ``x``."""
+    k, rho = c.level, c.residual
+    better = level_optimum(problem, x, k, deadline)
+    if better is None:
+        return c
+    fr = _Frozen(problem, x)
+    sub = _Frozen(problem, better)
+    if not fr.keeps(sub, k):
+        return c
+    inner = Certifier(level_tol=0.0, opt_tol=opt_tol)(problem, better)
+    if inner.levels[k].verdict not in (CERTIFIED, ILL_POSED, MET):
+        return c
+    diff = rho - sub.residual(k)
+    if diff <= opt_tol * scale:
+        return LevelCertificate(k, CERTIFIED, rho, c.stationarity, max(diff, 0.0), better,
+                                max(diff, 0.0))
+    return LevelCertificate(k, IMPROVABLE, rho, c.stationarity, diff, better, diff)
 
 
 # --------------------------------------------------------------------------------- repair
-def repair(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
-           sizes: Sequence[int], w: FloatArray, x: FloatArray, *,
-           level_tol: float = LEVEL_TOL, opt_tol: float = OPT_TOL, stat_tol: float = STAT_TOL,
-           act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL,
-           certificate: Certificate | None = None) -> Repair:
+def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = None, *,
+           certifier: Certifier | None = None, deadline: float | None = None,
+           clock: Callable[[], float] = perf_counter) -> Repair:
     """Make a certified answer from ``x``: exact level solves from the first failing level down.
 
-    Level ``k`` (the first neither met nor certified) is solved exactly over its frozen set at
-    the current point (:func:`active_set`, started at that point, which is feasible), then every
-    lower level in turn over its frozen set at the new point; the result is certified again.
-    Nothing above ``k`` moves: the higher levels keep their rows' values or their satisfied
-    sides, so a repair never costs a higher level anything.
+    Every unmet level, from the highest, and the first level neither met nor certified, is
+    solved exactly over its frozen set at the current point (:func:`level_optimum`, started at
+    that point, which is feasible, so a nearly optimal level takes an iteration or two); the
+    result is certified again. No level moves beyond the frozen set of the levels above it: a
+    repair never costs a higher level anything.
 
     Args:
-        A: Stacked rows (see :func:`certify`).
-        lo: Lower sides.
-        hi: Upper sides.
-        n: Number of variables.
-        mh: Number of hard rows.
-        sizes: Rows per level.
-        w: Level row weights.
+        problem: The problem.
         x: The answer to repair, inside the hard set.
-        level_tol: As in :func:`certify`.
-        opt_tol: As in :func:`certify`.
-        stat_tol: As in :func:`certify`.
-        act_tol: As in :func:`certify`.
-        hard_tol: As in :func:`certify`.
         certificate: The certificate of ``x`` when the caller has it.
+        certifier: The certificate to use (a solver's, with its workspaces and tolerances;
+            default a :class:`Certifier` with the default tolerances).
+        deadline: Reading of ``clock`` [s] after which the repair gives up.
+        clock: The clock of ``deadline`` (default :func:`time.perf_counter`).
 
     Returns:
         The :class:`Repair`: ``repaired`` True with a certified ``x``, or the input ``x`` with
         its certificate and a message saying why it could not be repaired.
     """
-    tols = {"level_tol": level_tol, "opt_tol": opt_tol, "stat_tol": stat_tol,
-            "act_tol": act_tol, "hard_tol": hard_tol}
     x = np.asarray(x, dtype=np.float64)
-    cert = certificate or certify(A, lo, hi, n, mh, sizes, w, x, **tols)
+    certifier = certifier or Certifier()
+    level_tol = certifier.level_tol
+    cert = certificate or certifier(problem, x)
     if cert.ok:
         return Repair(x, cert, False, "already certified")
     if not cert.inside:
@@ -545,22 +736,22 @@ def repair(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
     first = cert.first_failure
     assert first is not None  # not ok and inside: some level failed
     z = x.copy()
-    for k in range(first, len(sizes)):
-        fr = _Frame(A, lo, hi, n, mh, sizes, w, z, act_tol)
-        if fr.residual(k) <= level_tol * fr.scale(k) and k > first:
-            continue  # a met lower level keeps its point unless the solve would improve it
-        better = _level_optimum(fr, k)
+    for k in range(len(problem.sizes)):
+        if k != first and _Frozen(problem, z).residual(k) <= level_tol * problem.scale(
+                *problem.spans[k]):
+            continue  # a met level keeps its point
+        # every unmet level from the top: a certified level is optimal to the tolerance, not
+        # exactly, and the exact solves below would otherwise trade its rows within their
+        # frozen bands (its value kept, its stationarity lost)
+        better = level_optimum(problem, z, k, deadline, clock)
         if better is None:
-            return Repair(x, cert, False, f"the exact solve of level {k} failed")
-        z = _clip_box(fr, better)
-    new = certify(A, lo, hi, n, mh, sizes, w, z, keep=cert.levels[:first], **tols)
+            late = deadline is not None and clock() > deadline
+            return Repair(x, cert, False, f"the exact solve of level {k} "
+                          + ("ran out of time" if late else "failed"))
+        z = better
+    new = certifier(problem, z)
     if new.ok:
         return Repair(z, new, True, f"repaired from level {first}")
-    bad = new.first_failure
-    return Repair(x, cert, False, f"the repaired point still fails at level {bad}"
-                  if bad is not None else "the repaired point left the hard set")
-
-
-def _clip_box(fr: _Frame, x: FloatArray) -> FloatArray:
-    """Remove round-off outside the box (the step lands on it to ~1e-16)."""
-    return np.minimum(np.maximum(x, fr.lo[: fr.n]), fr.hi[: fr.n])
+    if new.inside and new.ill_posed:  # the exact optimum, not provably robust: kept, said so
+        return Repair(z, new, False, "the repaired point: " + new.reason())
+    return Repair(x, cert, False, "the repaired point: " + new.reason())

@@ -23,11 +23,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._validation import FloatArray
+from .problem import Problem
 
 #: relative distance to the span of the equality rows above, below which a row is dependent
 RTOL = 1e-9
-#: norm relative to the largest row norm below which a row counts as zero
-ZTOL = 1e-10
+#: norm relative to the largest row norm below which a row counts as zero (a row of norm 1e-8
+#: with a target of 1 needs |x| ~ 1e8 to move its violation: a constant inside any box)
+ZTOL = 1e-7
 
 
 def dependent_rows(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,
@@ -100,3 +102,44 @@ def reduce_levels(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int
         new_sizes.append(int((~drop[start: start + m]).sum()))
         start += m
     return A[keep], lo[keep], hi[keep], tuple(new_sizes), w[~drop], drop
+
+
+class Reduction:
+    """A problem without some of its level rows, refilled from the full problem on demand.
+
+    Args:
+        problem: The full problem.
+        drop: Mask of the level rows to leave out (length ``sum(problem.sizes)``), e.g.
+            :func:`dependent_rows`.
+
+    Attributes:
+        drop: The mask.
+        problem: The reduced problem (its own buffers; the same box, hard rows and metric).
+    """
+
+    __slots__ = ("drop", "problem", "rows", "version", "wrows")
+
+    def __init__(self, problem: Problem, drop: np.ndarray) -> None:
+        head = problem.head
+        self.drop = drop
+        self.wrows = np.flatnonzero(~drop)
+        self.rows = np.concatenate((np.arange(head), head + self.wrows))
+        sizes, start = [], 0
+        for m in problem.sizes:
+            sizes.append(int((~drop[start: start + m]).sum()))
+            start += m
+        self.problem = Problem(problem.n, problem.mh, sizes, problem.W,
+                               A=problem.A[self.rows], sides=problem.sides[:, self.rows],
+                               w=problem.w[self.wrows])
+        self.version = problem.weights_version
+
+    def fill(self, problem: Problem) -> Problem:
+        """The reduced problem with the current rows, sides, weights and metric of ``problem``."""
+        reduced = self.problem
+        np.take(problem.A, self.rows, axis=0, out=reduced.A)
+        np.take(problem.sides, self.rows, axis=1, out=reduced.sides)
+        if problem.weights_version != self.version:
+            reduced.set_weights(problem.w[self.wrows])
+            self.version = problem.weights_version
+        reduced.W = problem.W
+        return reduced

@@ -1,4 +1,4 @@
-"""One QP's optimality: the KKT check, the active-set polish and the exact active-set solve.
+"""One QP's optimality: the KKT check, the active-set polish and the one exact active-set solver.
 
 Inexact back-ends (ADMM, interior-point, HiGHS) stop at a tolerance, and their own "solved" is
 not a proof. For one level's QP
@@ -18,7 +18,10 @@ QP, never passed on as a success.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
 from scipy.optimize import nnls
@@ -115,18 +118,19 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     return Certificate(z, lam, lam_box, stat)
 
 
-def kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray
+def kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray, rcond: float = 1e-13
               ) -> tuple[FloatArray, FloatArray]:
     """Solve ``min 0.5 z'Pz + q'z s.t. C z = d`` through its KKT system (least squares).
 
-    Least squares (``rcond`` 1e-13) makes dependent rows of ``C`` and a singular ``P`` harmless.
+    Least squares (cut-off ``rcond`` relative to the largest singular value) makes dependent
+    rows of ``C`` and a singular ``P`` harmless.
 
     Returns:
         ``(z, mu)``: the point and the multipliers of the rows of ``C``.
     """
     n, m = q.size, C.shape[0]
     K = np.block([[P, C.T], [C, np.zeros((m, m))]])
-    sol = np.linalg.lstsq(K, np.concatenate((-q, d)), rcond=1e-13)[0]
+    sol = np.linalg.lstsq(K, np.concatenate((-q, d)), rcond=rcond)[0]
     return sol[:n], sol[n:]
 
 
@@ -182,19 +186,165 @@ def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
     return None
 
 
+def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: FloatArray,
+               h: FloatArray, z0: FloatArray, *, max_iter: int | None = None,
+               tight: float = TIGHT_TOL, start_tol: float = 1e-7, rcond: float = 1e-13,
+               deadline: float | None = None, clock: Callable[[], float] = perf_counter
+               ) -> FloatArray | None:
+    """Primal active-set solve of ``min 1/2 z'Hz + c'z  s.t.  E z = e, G z <= h`` from ``z0``.
+
+    The textbook method (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 16.3) from
+    a feasible start: each iteration solves the equality-constrained QP on the equalities and
+    the working set (its KKT system by least squares, :func:`kkt_point`, so a singular ``H`` and
+    dependent rows are harmless, and the step lands exactly on the working constraints), then
+    steps to the first blocking constraint, or releases the working constraint with the most
+    negative multiplier (a working set seen before is never entered again, which stops cycling
+    on degenerate vertices). The one exact QP solver of the package: the cascades' rescue
+    (:func:`active_set_from`) and the certificate's repair
+    (:func:`uvms_qp.hqp.certificate.repair`) both run it.
+
+    Args:
+        H: Positive semi-definite Hessian, shape (m, m).
+        c: Linear term, shape (m,).
+        E: Equality rows, shape (p, m) (normalised rows keep the tolerances meaningful).
+        e: Their values, shape (p,).
+        G: Inequality rows, shape (q, m).
+        h: Their sides, shape (q,).
+        z0: Start, feasible to ``start_tol (1 + |side|)`` (None is returned otherwise).
+        max_iter: Iteration cap (default ``10 (m + q) + 50``).
+        tight: Relative slack below which an inequality starts in the working set.
+        start_tol: Relative feasibility tolerance of the start.
+        rcond: Cut-off of the KKT least squares (:func:`kkt_point`).
+        deadline: Reading of ``clock`` [s] after which the solve gives up (None: none).
+        clock: The clock of ``deadline`` (default :func:`time.perf_counter`).
+
+    Returns:
+        The stationary point with non-negative multipliers, or None (infeasible start, no
+        progress, iteration cap, deadline).
+    """
+    m = z0.size
+    rel = 1.0 + np.abs(h)
+    z = np.asarray(z0, dtype=np.float64).copy()
+    if np.any(G @ z - h > start_tol * rel) or np.any(
+            np.abs(E @ z - e) > start_tol * (1.0 + np.abs(e))):
+        return None
+    work = h - G @ z <= tight * rel
+    seen = {work.tobytes()}
+    pe = E.shape[0]
+    landed = False  # the last step was a full one: z is the optimum on its working set
+    for _ in range(max_iter or 10 * (m + G.shape[0]) + 50):
+        if deadline is not None and clock() > deadline:
+            return None
+        C = np.vstack((E, G[work]))
+        grad = H @ z + c
+        d = np.concatenate((e - E @ z, h[work] - G[work] @ z))
+        p, mu_all = kkt_point(H, grad, C, d, rcond=rcond)
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(mu_all))):
+            return None
+        if _unsolved(H, C, grad, d, p, mu_all):
+            # the working set's equality QP has no minimiser (H is only semi-definite): descend
+            # along a direction of zero curvature that keeps the working constraints, to the
+            # first blocking constraint
+            flat = _flat_descent(H, C, grad)
+            if flat is None:
+                return None
+            hit, alpha = _blocking(G, h, z, flat, work, rel, cap=math.inf)
+            if hit < 0:
+                return None  # unbounded below
+            z = z + alpha * flat
+            landed = False
+            work = work.copy()
+            work[hit] = True
+            seen.add(work.tobytes())
+            continue
+        mu = mu_all[pe:]
+        if landed or np.abs(p).max(initial=0.0) <= 1e-13 * max(
+                1.0, float(np.abs(z).max(initial=0.0))):
+            # stationary on the working set (after a full step, p is round-off of the least
+            # squares, relative to the scale of H: z stays where the step put it, exactly on
+            # its working constraints)
+            landed = False
+            if not mu.size or mu.min() >= -1e-12 * max(1.0, float(np.abs(mu).max())):
+                return z
+            idx = np.flatnonzero(work)
+            for j in np.argsort(mu):
+                if mu[j] >= 0.0:
+                    return z
+                trial = work.copy()
+                trial[idx[j]] = False
+                if trial.tobytes() not in seen:
+                    work = trial
+                    seen.add(trial.tobytes())
+                    break
+            else:
+                return z
+            continue
+        hit, alpha = _blocking(G, h, z, p, work, rel, cap=1.0)
+        z = z + alpha * p
+        landed = hit < 0
+        if hit >= 0:
+            work = work.copy()
+            work[hit] = True
+            seen.add(work.tobytes())
+    return None
+
+
+def _unsolved(H: FloatArray, C: FloatArray, grad: FloatArray, d: FloatArray, p: FloatArray,
+              mu: FloatArray) -> bool:
+    """True when ``(p, mu)`` does not solve the KKT system (it has no solution)."""
+    Hp = H @ p
+    stat = Hp + grad
+    if C.shape[0]:
+        stat += C.T @ mu
+    scale = max(1.0, float(np.abs(grad).max(initial=0.0)), float(np.abs(Hp).max(initial=0.0)))
+    if float(np.abs(stat).max(initial=0.0)) > 1e-9 * scale:
+        return True
+    return bool(C.shape[0]) and float(np.abs(C @ p - d).max()) > 1e-9 * max(
+        1.0, float(np.abs(d).max(initial=0.0)))
+
+
+def _flat_descent(H: FloatArray, C: FloatArray, grad: FloatArray) -> FloatArray | None:
+    """``-grad`` projected on the null space of ``[H; C]`` (None when that is ~0)."""
+    M = np.vstack((H, C))
+    _, s, Vt = np.linalg.svd(M)
+    top = float(s[0]) if s.size else 0.0
+    rank = int(np.sum(s > 1e-12 * max(top, 1e-300)))
+    N = Vt[rank:]
+    p = -(N.T @ (N @ grad))
+    if float(np.abs(p).max(initial=0.0)) <= 1e-12 * max(1.0, float(np.abs(grad).max())):
+        return None
+    return p
+
+
+def _blocking(G: FloatArray, h: FloatArray, z: FloatArray, p: FloatArray, work: np.ndarray,
+              rel: FloatArray, cap: float) -> tuple[int, float]:
+    """The first constraint outside the working set that the step ``z + alpha p`` meets.
+
+    Returns:
+        ``(index, alpha)``, or ``(-1, cap)`` when none is met before ``alpha = cap``.
+    """
+    Gp = G @ p
+    block = ~work & (Gp > 1e-14 * rel)
+    if block.any():
+        slack = np.maximum(h - G @ z, 0.0)
+        ratios = np.full(G.shape[0], np.inf)
+        ratios[block] = slack[block] / Gp[block]
+        hit = int(np.argmin(ratios))
+        if ratios[hit] < cap:
+            return hit, float(ratios[hit])
+    return -1, cap
+
+
 def active_set_from(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
                     lb: FloatArray | None, ub: FloatArray | None, z0: FloatArray,
-                    max_iter: int = 200) -> Certificate | None:
-    """Exact primal active-set solve of the QP from a feasible point, then certified.
+                    max_iter: int = 200, deadline: float | None = None,
+                    clock: Callable[[], float] = perf_counter) -> Certificate | None:
+    """Exact solve of the QP from a feasible point (:func:`active_set`), then certified.
 
     The recovery when a back-end gives up (e.g. calls a 1e-10-thin feasible set infeasible):
-    the textbook primal active-set method (Nocedal & Wright, *Numerical Optimization*, Alg. 16.3)
-    started from a point known to be feasible, for a cascade the previous level's answer
-    (``y = 0``) with the smallest slacks of the level's own rows. Each iteration solves the
-    equality-constrained QP on the working set (KKT system by least squares, so dependent rows
-    and a singular ``P`` are harmless), steps to the first blocking constraint, or releases the
-    working constraint with the most negative multiplier. The answer is returned only when
-    :func:`certify` proves it optimal.
+    :func:`active_set` started from a point known to be feasible, for a cascade the previous
+    level's answer (``y = 0``) with the smallest slacks of the level's own rows; the bounds
+    become rows of ``G``. The answer is returned only when :func:`certify` proves it optimal.
 
     Args:
         P: Hessian, shape (k, k), positive semi-definite.
@@ -205,6 +355,8 @@ def active_set_from(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
         ub: Upper bounds on z (``+inf`` allowed) or None.
         z0: Feasible starting point (checked to :data:`FEAS_TOL`; None is returned otherwise).
         max_iter: Iteration cap (each iteration adds or releases one constraint).
+        deadline: Reading of ``clock`` [s] after which the solve gives up (None: none).
+        clock: The clock of ``deadline``.
 
     Returns:
         The certificate of the optimum, or None.
@@ -219,51 +371,6 @@ def active_set_from(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
                           np.full(n, np.inf) if lb is None else -lb))
     live = np.isfinite(rhs)
     rows, rhs = rows[live], rhs[live]
-    rel = 1.0 + np.abs(rhs)
-    z = z0.astype(np.float64, copy=True)
-    work = rhs - rows @ z <= TIGHT_TOL * rel
-    seen = {work.tobytes()}
-    for _ in range(max_iter):
-        cert = certify(P, q, G, h, lb, ub, z)
-        if cert is not None:
-            return cert
-        C = rows[work]
-        m = C.shape[0]
-        # the step p also lands exactly on the working constraints (they may start 1e-9 away)
-        p, mu = kkt_point(P, P @ z + q, C, rhs[work] - C @ z)
-        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(mu))):
-            return None
-        if np.abs(p).max(initial=0.0) <= 1e-12 * max(1.0, float(np.abs(z).max(initial=0.0))):
-            if not m or mu.min() >= 0.0:
-                return None  # stationary on the working set yet not certified: give up
-            # release the most negative multiplier whose release leads to a working set not
-            # seen before (degenerate, nearly parallel rows would otherwise cycle)
-            idx = np.flatnonzero(work)
-            for j in np.argsort(mu):
-                if mu[j] >= 0.0:
-                    return None
-                trial = work.copy()
-                trial[idx[j]] = False
-                if trial.tobytes() not in seen:
-                    work = trial
-                    break
-            else:
-                return None
-            seen.add(work.tobytes())
-            continue
-        Cp = rows @ p
-        slack = np.maximum(rhs - rows @ z, 0.0)
-        block = ~work & (Cp > 1e-14 * rel)
-        alpha, hit = 1.0, -1
-        if block.any():
-            ratios = np.full(rows.shape[0], np.inf)
-            ratios[block] = slack[block] / Cp[block]
-            hit = int(np.argmin(ratios))
-            if ratios[hit] < 1.0:
-                alpha = float(ratios[hit])
-            else:
-                hit = -1
-        z = z + alpha * p
-        if hit >= 0:
-            work[hit] = True
-    return certify(P, q, G, h, lb, ub, z)
+    z = active_set(P, q, np.zeros((0, n)), np.zeros(0), rows, rhs, z0, max_iter=max_iter,
+                   start_tol=FEAS_TOL, deadline=deadline, clock=clock)
+    return None if z is None else certify(P, q, G, h, lb, ub, z)

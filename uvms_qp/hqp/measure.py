@@ -14,9 +14,10 @@ each level's weighted ``r_k^2 = sum_i w_i s_i^2``. The decision:
 * a claimed success whose hard violation exceeds ``hard_tol * max(1, max |finite hard side|)``:
   ``backend_error`` (the message names the bound or row);
 * otherwise ``optimal`` when every ``r_k <= level_tol * max(1, max |finite side of level k|)``,
-  else ``level_infeasible`` at the first unmet level; a certificate, when given, is asked once
-  about an answer with an unmet level, and a level it cannot prove optimal makes the answer
-  ``unproven``.
+  else ``level_infeasible`` at the first unmet level, once the optimality certificate (a
+  solver's :class:`uvms_qp.hqp.certificate.Certifier`, asked about every answer with an unmet
+  level) has proven every unmet level optimal; a level it cannot prove makes the answer
+  ``unproven`` (feasible, not proven optimal; the certificate is kept in the result).
 
 :func:`hard_violation` is the one measure of "how far is x outside the hard set" on plain arrays,
 for callers that hold the box and rows themselves (simulation logs, benchmarks).
@@ -26,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,10 +35,14 @@ from .._validation import FloatArray
 from .problem import Problem, scale_of
 from .result import OK_STATUSES, HierarchyResult, Status
 
-#: ``certify(problem, x) -> k``: the first level of ``x`` that is neither met nor proven optimal,
-#: or None when every level is (asked only when a level is unmet; e.g.
-#: ``uvms_qp.hqp.certificate.certify(*problem_arrays(problem), x).first_failure``).
-Certifier = Callable[[Problem, FloatArray], "int | None"]
+if TYPE_CHECKING:  # pragma: no cover - the certificate is handed in by the solver
+    from .certificate import Certificate
+
+#: ``certify(problem, x, s, residuals, hard_violation) -> Certificate``: the optimality
+#: certificate asked about an answer with an unmet level (a solver's
+#: :class:`uvms_qp.hqp.certificate.Certifier`, or a stand-in a test installs), given the
+#: measurement's slacks, level residuals and hard violation.
+Certify = Callable[[Problem, FloatArray, FloatArray, list[float], float], "Certificate"]
 
 _OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
 _SQRT = math.sqrt
@@ -127,7 +132,7 @@ def placeholder(problem: Problem) -> FloatArray:
 def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str = "",
              info: dict[str, object] | None = None, level_tol: float = 1e-6,
              hard_tol: float = 1e-9, solve_time: float = 0.0, measured: Measured | None = None,
-             certify: Certifier | None = None) -> HierarchyResult:
+             certify: Certify | None = None) -> HierarchyResult:
     """Measure ``x`` against ``problem`` and decide its status (see the module docstring).
 
     Args:
@@ -142,8 +147,9 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
         hard_tol: Relative tolerance on the hard box and rows.
         solve_time: Wall time of the solve [s].
         measured: :func:`measure` of ``x`` when the caller has it already.
-        certify: Optimality certificate asked about an answer with an unmet level (None: not
-            asked).
+        certify: The optimality certificate, asked about an answer with an unmet level (None:
+            not asked; the status then only says that the hard rows hold and which level is
+            unmet, which is not a proof).
 
     Returns:
         The result; ``x`` is always finite.
@@ -176,6 +182,7 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
     else:
         residuals = [_INF if v != v else _SQRT(v) for v in squares[1:]]
     status, infeasible = claim, None
+    cert: Certificate | None = None
     if claim is _OPTIMAL or claim is _LEVEL_INFEASIBLE:
         if hv > hard_tol and hv > hard_tol * problem.hard_scale:
             status = Status.BACKEND_ERROR
@@ -191,10 +198,9 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
                     infeasible, status = k, _LEVEL_INFEASIBLE
                     break
             if infeasible is not None and certify is not None:
-                failed = certify(problem, x)
-                if failed is not None:
+                cert = certify(problem, x, s, residuals, hv)
+                if not cert.ok:
                     status = Status.UNPROVEN
-                    message = (message + "; " if message else "") + (
-                        f"level {failed} is not proven optimal")
+                    message = (message + "; " if message else "") + cert.reason()
     return HierarchyResult(x, status, solver, residuals, infeasible, hv, solve_time, message,
-                           info or {}, s, problem.spans, problem.box.copy())
+                           info or {}, s, problem.spans, problem.box.copy(), cert)

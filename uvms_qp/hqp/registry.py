@@ -42,8 +42,13 @@ class SolverSpec:
             certificate (:mod:`uvms_qp.hqp.kkt`); an answer that cannot be
             certified fails the QP (retries, then a truthful non-ok status). For back-ends whose
             own "solved" is not accurate enough to trust.
-        prox_steps: Proximal refinements ``min f + rho/2 |y - y_j|^2`` after the first QP of a
-            level, each shrinking the bias of ``rho`` by a factor ``rho / sigma_min^2``.
+        prox_steps: Most proximal refinements ``min f + rho/2 |y - y_j|^2`` after the first QP
+            of a level, each shrinking the bias of ``rho`` along a direction of curvature
+            ``sigma^2`` by ``rho / (rho + sigma^2)``; they stop once the answer no longer moves
+            or converges slowly, and the answer's active set is then solved exactly on the QP
+            without ``rho`` (:func:`uvms_qp.hqp.kkt.certified_point`).
+        time_setting: Name of the back-end's own time-limit setting [s] (empty: none); a cascade
+            hands it the time left under its cap.
     """
 
     name: str
@@ -63,6 +68,7 @@ class SolverSpec:
     prox_steps: int = 0
     certify: bool = False
     retries: tuple[MappingProxyType[str, Any], ...] = ()
+    time_setting: str = ""
 
     @property
     def qp_name(self) -> str:
@@ -78,7 +84,7 @@ class SolverSpec:
 def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: float,
              freeze_margin: float, sparse: bool = False, reg: float = 0.0,
              prox_steps: int = 0, retries: tuple[dict[str, Any], ...] = (),
-             certify: bool = False, **settings: Any) -> SolverSpec:
+             certify: bool = False, time_setting: str = "", **settings: Any) -> SolverSpec:
     return SolverSpec(
         name=f"cascade:{name}",
         kind="cascade",
@@ -93,6 +99,7 @@ def _cascade(name: str, module: str, pip: str, *, exact: bool, agreement_tol: fl
         prox_steps=prox_steps,
         certify=certify,
         retries=tuple(MappingProxyType(r) for r in retries),
+        time_setting=time_setting,
     )
 
 
@@ -117,11 +124,12 @@ SOLVERS: tuple[SolverSpec, ...] = (
         bounds=False,
         agreement_tol=1e-10,
     ),
-    # quadprog needs a positive definite Hessian: regularise and refine proximally
+    # quadprog needs a positive definite Hessian: regularise, refine proximally while that
+    # converges, then solve the active set of the answer exactly on the unregularised QP
     _cascade("quadprog", "quadprog", "quadprog", exact=True, agreement_tol=1e-8,
              freeze_margin=1e-10, reg=1e-7, prox_steps=4),
     _cascade("daqp", "daqp", "daqp", exact=True, agreement_tol=1e-8, freeze_margin=1e-10,
-             reg=1e-7, prox_steps=4, primal_tol=1e-10, eps_prox=0.0),
+             reg=1e-7, prox_steps=4, time_setting="time_limit", primal_tol=1e-10, eps_prox=0.0),
     # inexact back-ends (interior-point, ADMM): every answer is sharpened on its active set and
     # kept only with a KKT certificate, so frozen slacks need a round-off margin only.
     # ProxQP's max_iter counts outer (proximal) iterations, each running up to 1500 inner ones:
@@ -138,17 +146,18 @@ SOLVERS: tuple[SolverSpec, ...] = (
              certify=True, eps_abs=1e-10, eps_rel=1e-12,
              retries=({"eps_abs": 1e-9}, {"eps_abs": 1e-8})),
     _cascade("clarabel", "clarabel", "clarabel", exact=False, agreement_tol=1e-6,
-             freeze_margin=1e-10, sparse=True, certify=True, tol_gap_abs=1e-10, tol_gap_rel=1e-10,
+             freeze_margin=1e-10, sparse=True, certify=True, time_setting="time_limit",
+             tol_gap_abs=1e-10, tol_gap_rel=1e-10,
              tol_feas=1e-10),
     # HiGHS and OSQP stop at tolerances their own "solved" does not guarantee (110 and 233 of
     # 1000 failures before certification); time_limit [s] bounds one HiGHS QP (an exhausted
     # limit is rescued like any failed QP)
     _cascade("highs", "highspy", "highspy", exact=False, agreement_tol=1e-6, freeze_margin=1e-10,
-             sparse=True, certify=True, qp_regularization_value=1e-11,
+             sparse=True, certify=True, time_setting="time_limit", qp_regularization_value=1e-11,
              primal_feasibility_tolerance=1e-10, dual_feasibility_tolerance=1e-10,
              time_limit=1.0, qp_iteration_limit=10_000),
     _cascade("osqp", "osqp", "osqp", exact=False, agreement_tol=1e-6, freeze_margin=1e-10,
-             sparse=True, certify=True,
+             sparse=True, certify=True, time_setting="time_limit",
              eps_abs=1e-8, eps_rel=1e-8, max_iter=20_000,
              polishing=False),  # the certificate sharpens instead (and OSQP stays quiet)
 )

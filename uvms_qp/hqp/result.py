@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._validation import FloatArray
+
+if TYPE_CHECKING:  # pragma: no cover - the certificate module sits above the result
+    from .certificate import Certificate
 
 
 class Status(StrEnum):
@@ -15,13 +19,21 @@ class Status(StrEnum):
     Members:
         OPTIMAL: every level is met (to tolerance) and the hard rows hold.
         LEVEL_INFEASIBLE: ``x`` is the lexicographic optimum, but some level cannot be met exactly;
-            ``HierarchyResult.infeasible_level`` is the first such level.
-        UNPROVEN: ``x`` is finite and inside the hard set, but an optimality certificate found a
-            direction that improves an unmet level: not the lexicographic optimum.
+            ``HierarchyResult.infeasible_level`` is the first such level. Every unmet level is
+            proven optimal by the certificate (:mod:`uvms_qp.hqp.certificate`).
+        UNPROVEN: ``x`` is finite and inside the hard set, but it is not proven to be the
+            lexicographic optimum: the optimality certificate of an unmet level failed (an
+            improving direction, an ill-posed level, or a closed form's damping);
+            ``HierarchyResult.certificate`` and the message say which level and why.
         HARD_INFEASIBLE: the hard box and hard rows admit no point; ``x`` is only a finite
             placeholder (the closest point the back-end reached).
         BACKEND_ERROR: the back-end failed or could not enforce a requirement (message says which);
             ``x`` is finite but must not be used as a lexicographic optimum.
+        DAMPED: ``x`` is the lexicographic optimum of the problem with damping rows added to some
+            levels near a singularity (:mod:`uvms_qp.hqp.damping`), not of the problem without
+            them: those levels trade residual for bounded rates.
+        BLENDED: ``x`` is a convex combination of the optima with and without tasks whose
+            activation ramps between 0 and 1: the optimum of neither.
     """
 
     OPTIMAL = "optimal"
@@ -29,7 +41,14 @@ class Status(StrEnum):
     UNPROVEN = "unproven"
     HARD_INFEASIBLE = "hard_infeasible"
     BACKEND_ERROR = "backend_error"
+    DAMPED = "damped"
+    BLENDED = "blended"
 
+
+#: How a summary reads the certificate's verdict on a level.
+_VERDICTS = {"met": "met", "certified": "NOT met, proven optimal",
+             "ill_posed": "NOT met, ill-posed (not proven)", "improvable": "NOT met, improvable",
+             "unproven": "NOT met, not proven optimal"}
 
 #: Statuses that claim the lexicographic optimum.
 OK_STATUSES = (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
@@ -60,12 +79,16 @@ class HierarchyResult:
             ``[box; hard rows; level rows]`` (> 0 above ``hi``, < 0 below ``lo``).
         box: The hard box of the solve, shape (2, n): rows ``lower`` and ``upper`` (the
             result's own copy).
+        certificate: The optimality certificate of the unmet levels
+            (:class:`~uvms_qp.hqp.certificate.Certificate`), or None when every level is met or
+            none was asked.
     """
 
     __slots__ = (
         "_active",
         "_spans",
         "box",
+        "certificate",
         "hard_violation",
         "infeasible_level",
         "info",
@@ -82,7 +105,8 @@ class HierarchyResult:
                  level_residuals: list[float], infeasible_level: int | None,
                  hard_violation: float, solve_time: float, message: str,
                  info: dict[str, object], slacks: FloatArray,
-                 spans: tuple[tuple[int, int], ...], box: FloatArray) -> None:
+                 spans: tuple[tuple[int, int], ...], box: FloatArray,
+                 certificate: Certificate | None = None) -> None:
         self.x = x
         self.status = status
         self.solver = solver
@@ -95,12 +119,23 @@ class HierarchyResult:
         self.slacks = slacks
         self._spans = spans
         self.box = box
+        self.certificate = certificate
         self._active: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def ok(self) -> bool:
         """True when ``x`` is the lexicographic optimum (optimal or level_infeasible)."""
         return self.status in OK_STATUSES
+
+    @property
+    def ill_posed(self) -> bool:
+        """True for an ``unproven`` answer whose first unproven level is ill-posed.
+
+        The exact optimum of its frozen set, but a 1e-9 change of the levels above could change
+        it by more than the tolerance (no solver can prove better).
+        """
+        cert = self.certificate
+        return self.status is Status.UNPROVEN and cert is not None and cert.ill_posed
 
     @property
     def level_slacks(self) -> list[FloatArray]:
@@ -142,9 +177,12 @@ class HierarchyResult:
                if self.infeasible_level is not None else "")
             + f" in {self.solve_time * 1e6:.1f} us",
         ]
+        cert = self.certificate
         for k, (r, (a, b)) in enumerate(zip(self.level_residuals, self._spans, strict=True)):
             mark = ""
-            if self.ok:
+            if cert is not None:
+                mark = _VERDICTS.get(cert.levels[k].verdict, "")
+            elif self.ok:
                 mark = "NOT met" if k == self.infeasible_level else (
                     "met" if self.infeasible_level is None or k < self.infeasible_level else "")
             lines.append(f"  level {k}: residual {r:.3e} ({b - a} rows) {mark}".rstrip())

@@ -1,13 +1,19 @@
 """The entry points: a reusable :class:`HierarchySolver` and the one-shot :func:`solve_hierarchy`.
 
 One path for every call: :class:`~uvms_qp.hqp.validate.Validator` (user input only) ->
-back-end (:mod:`uvms_qp.hqp.backends`) -> :func:`~uvms_qp.hqp.measure.evaluate`.
+back-end (:mod:`uvms_qp.hqp.backends`) -> :func:`~uvms_qp.hqp.measure.evaluate` (the measurement
+and the optimality certificate of every unmet level) -> for an answer the certificate cannot
+prove: the back-end once more on the problem without its degenerate rows when it reduces them
+(DAQP), else :func:`~uvms_qp.hqp.certificate.repair` (an exact active-set pass from the answer),
+each certified again; what is still not proven is reported ``unproven``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from time import perf_counter as _clock
+import math
+from collections.abc import Callable, Sequence
+from time import perf_counter
+from time import perf_counter as _wall
 from typing import Any
 
 import numpy as np
@@ -18,11 +24,12 @@ from .backends import Backend
 from .backends.cascade import CascadeBackend
 from .backends.daqp import DaqpBackend
 from .backends.nullspace import NullspaceBackend
-from .measure import Certifier, clip_to_box, evaluate
+from .certificate import Certifier, repair
+from .measure import Certify, clip_to_box, evaluate
 from .problem import Problem
 from .registry import SolverSpec, available_solvers, get_spec
-from .result import OK_STATUSES, HierarchyResult
-from .validate import Validator
+from .result import OK_STATUSES, HierarchyResult, Status
+from .validate import Validator, check_magnitude
 
 
 def make_backend(spec: SolverSpec, options: dict[str, Any]) -> Backend:
@@ -44,14 +51,25 @@ class HierarchySolver:
             positive; None for the identity (e.g. ``[10, 10, 10, 1, 1, 1]`` moves the arm rather
             than the vehicle, ``000_7b5f597fe4e36aa4.txt, Eq. (17)``).
         options: Back-end options. Common keys: ``level_tol`` (relative tolerance deciding that a
-            level is met, default from the registry), ``hard_tol``; DAQP settings (``rho_soft``,
+            level is met, default from the registry), ``hard_tol``, ``time_cap`` (cap of one
+            solve [s] on :attr:`clock`, default none; a safe solver sets its own: a cascade
+            starts no QP after it and reports ``backend_error``, the repair gives up); DAQP
+            settings (``rho_soft``,
             ``primal_tol``, ``time_limit``...) and ``rho_ladder``; cascade ``rank_tol``, ``reg``
-            and qpsolvers settings; nullspace ``rcond`` and ``atol``.
+            and qpsolvers settings; nullspace ``rcond``, ``atol`` and ``damping``.
 
     Attributes:
         backend: The back-end object (:class:`~uvms_qp.hqp.backends.Backend`).
-        certify: Optimality certificate asked about every answer with an unmet level
-            (:data:`~uvms_qp.hqp.measure.Certifier`); None: unmet levels are not questioned.
+        certify: The optimality certificate asked about every answer with an unmet level (a
+            :class:`~uvms_qp.hqp.certificate.Certifier` at the solver's tolerances by default,
+            or a stand-in :data:`~uvms_qp.hqp.measure.Certify`); None: unmet levels are not
+            questioned (the status then claims what it has not proven).
+        repair: An answer the certificate cannot prove is solved again without its degenerate
+            rows (a back-end that reduces them) or goes through
+            :func:`~uvms_qp.hqp.certificate.repair` before it is reported ``unproven``
+            (default: for back-ends that enforce the hard set; a closed form's answer is
+            reported as it is).
+        time_cap: Cap of one solve [s] on :attr:`clock` (a cascade's QPs and the repair).
         saturate: Clip every claimed answer into the box before measuring it, the amount in
             ``info["clipped"]`` (for a closed form that cannot enforce the box, whose command is
             its saturated answer); False by default.
@@ -74,9 +92,15 @@ class HierarchySolver:
                                    "options['level_tol']", positive=True)
         self.hard_tol = as_scalar(opts.pop("hard_tol", self.spec.hard_tol),
                                   "options['hard_tol']", positive=True)
+        time_cap = as_scalar(opts.pop("time_cap", math.inf), "options['time_cap']",
+                             positive=True, allow_inf=True)
         self.backend: Backend = make_backend(self.spec, opts)
+        self.time_cap = time_cap
         self._name = self.spec.name
-        self.certify: Certifier | None = None
+        self.certifier = Certifier(level_tol=self.level_tol, hard_tol=self.hard_tol)
+        self.certify: Certify | None = self.certifier
+        self.repair = self.spec.bounds
+        self._clock: Callable[[], float] = perf_counter
         self.saturate = False
         self.weights = weights
         self._validate = Validator()
@@ -85,6 +109,29 @@ class HierarchySolver:
     def name(self) -> str:
         """Name of the solver."""
         return self.spec.name
+
+    @property
+    def time_cap(self) -> float:
+        """Cap of one solve [s] on :attr:`clock` (inf: none); the back-end reads it too."""
+        return self._time_cap
+
+    @time_cap.setter
+    def time_cap(self, value: float) -> None:
+        self._time_cap = float(value)
+        self.backend.time_cap = self._time_cap
+
+    @property
+    def clock(self) -> Callable[[], float]:
+        """The clock [s] of :attr:`time_cap`; the back-end reads it too.
+
+        :func:`time.perf_counter` by default; a safe solver sets its own (a test may fake it).
+        """
+        return self._clock
+
+    @clock.setter
+    def clock(self, clock: Callable[[], float]) -> None:
+        self._clock = clock
+        self.backend.clock = clock
 
     @property
     def weights(self) -> Any:
@@ -115,12 +162,14 @@ class HierarchySolver:
         W = self._metric
         if W is None or W.shape[0] != n or src != self._metric_src:
             W = as_vector(raw, "weights", n, positive=True).copy()  # never the caller's array
+            check_magnitude(W, "weights", weights=True)
             self._metric, self._metric_src = W, src
         return W
 
     def reset(self) -> None:
         """Forget the back-end's warm start: the next solve starts cold."""
         self.backend.reset()
+        self.certifier.reset()
 
     def solve(self, levels: Sequence[Any], lower: Any = None, upper: Any = None,
               hard: Sequence[Any] | None = None) -> HierarchyResult:
@@ -150,13 +199,57 @@ class HierarchySolver:
 
         The problem's own metric ``problem.W`` is used; ``x`` is measured like any answer.
         """
-        start = _clock()
+        start = _wall()
+        began = self._clock()
         answer = self.backend.solve(problem)
         x, message, info = answer.x, answer.message, answer.info
         if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
             x, message, info = _saturated(problem, x, message, info)
-        return evaluate(problem, x, answer.status, self._name, message, info, self.level_tol,
-                        self.hard_tol, _clock() - start, answer.measured, self.certify)
+        result = evaluate(problem, x, answer.status, self._name, message, info, self.level_tol,
+                          self.hard_tol, _wall() - start, answer.measured, self.certify)
+        if result.status is Status.UNPROVEN and self.repair:
+            result = self._repaired(problem, result, start, began)
+        return result
+
+    def _repaired(self, problem: Problem, result: HierarchyResult, start: float, began: float
+                  ) -> HierarchyResult:
+        """An unproven answer made proven, or as it was with what was tried in its message.
+
+        First the back-end again on the problem without its degenerate rows (when it reduces
+        them: DAQP), then :func:`~uvms_qp.hqp.certificate.repair` from the better of the two
+        answers. An ill-posed level is left as it is: its exact optimum is the answer already.
+        """
+        cert = result.certificate
+        if cert is None or cert.ok or cert.ill_posed:
+            return result
+        if self.backend.reduce(problem):
+            answer = self.backend.solve(problem)
+            again = evaluate(problem, answer.x, answer.status, self._name, answer.message,
+                             {**answer.info, "reduced": True}, self.level_tol, self.hard_tol,
+                             _wall() - start, answer.measured, self.certify)
+            if again.status is not Status.UNPROVEN:
+                if again.ok:
+                    return again
+                return _noted(result, "degenerate rows reduced: " + again.status.value, start)
+            result = again
+            cert = again.certificate
+            if cert is None or cert.ill_posed:
+                return result
+        fixed = repair(problem, result.x, cert, certifier=self.certifier,
+                       deadline=began + self._time_cap, clock=self._clock)
+        if not fixed.repaired and fixed.x is result.x:
+            return _noted(result, f"repair: {fixed.message}", start)
+        info = {**result.info, "repaired_from_level": cert.first_failure}
+        message = "; ".join(m for m in (result.message, fixed.message) if m)
+        return evaluate(problem, fixed.x, Status.OPTIMAL, self._name, message, info,
+                        self.level_tol, self.hard_tol, _wall() - start, None, self.certify)
+
+
+def _noted(result: HierarchyResult, note: str, start: float) -> HierarchyResult:
+    """``result`` with ``note`` added to its message and the time so far."""
+    result.message = f"{result.message}; {note}" if result.message else note
+    result.solve_time = _wall() - start
+    return result
 
 
 def _saturated(problem: Problem, x: Any, message: str, info: dict[str, object]

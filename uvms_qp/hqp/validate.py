@@ -9,12 +9,25 @@ the whole stack with a few reductions (:func:`sides_and_rows_ok`):
 * no NaN side, no lower side ``+inf`` and no upper side ``-inf`` (e.g. an infinite equality
   target), no lower side above its upper side;
 * no NaN or inf in a matrix;
+* every finite number within the accepted magnitudes (below);
 * the row weights are finite and positive.
 
+Accepted magnitudes: every finite row entry, side and box bound is at most
+:data:`MAX_MAGNITUDE` (1e15) in absolute value, every row weight and metric entry within
+``[1 / MAX_MAGNITUDE, MAX_MAGNITUDE]``; zero entries and infinite sides are always accepted. The
+back-ends read large finite numbers as infinite (HiGHS and Clarabel from 1e20, OSQP and PIQP from
+1e30: a bound there is silently dropped, or the problem refused with text on the console) and the
+cascade hands them sides shifted by rows times points, so given numbers stay five orders below
+the smallest of those thresholds. Beyond about 1e154 the squares the back-ends form overflow and
+their linear algebra (LAPACK fed inf or NaN) fails or never returns. A problem outside the range
+is refused with an :class:`~uvms_qp.errors.InputError` naming the entry: scale it (other units, a
+smaller gain). Tiny rows are accepted: whatever a back-end makes of them is measured like any
+answer.
+
 When the input is not in this common form or a check fails, the items are validated one by one,
-which raises the error naming the culprit (``levels[1][0].A: expected 2 columns, got 3``); an
-overflowing reduction on legitimate values (entries near 1e154) passes that second look and the
-problem is solved as filled.
+which raises the error naming the culprit (``levels[1][0].A: expected 2 columns, got 3``); a
+reduction that only looks out of range (the sum of many squared entries near the limit) passes
+that second look and the problem is solved as filled.
 """
 
 from __future__ import annotations
@@ -36,7 +49,41 @@ _Parsed = tuple[list[FloatArray], list[FloatArray], list[FloatArray], list[Float
 """Rows, lower sides, upper sides and weights of every item (hard items first), the number of
 hard items and the level sizes."""
 _MIN = np.minimum.reduce
+_MAX = np.maximum.reduce
 _F64 = np.dtype(np.float64)
+
+MAX_MAGNITUDE = 1e15
+"""Largest absolute value of a finite row entry, side or box bound; weights and metric entries
+lie within ``[1 / MAX_MAGNITUDE, MAX_MAGNITUDE]`` (see the module docstring)."""
+_MAX_SQUARE = MAX_MAGNITUDE * MAX_MAGNITUDE
+_MIN_WEIGHT = 1.0 / MAX_MAGNITUDE
+
+
+def check_magnitude(values: FloatArray, name: str, *, weights: bool = False) -> None:
+    """Raise when a finite entry of ``values`` lies outside the accepted magnitudes.
+
+    Args:
+        values: A validated float array (NaN already refused; infinities are skipped).
+        name: The argument named in the message, e.g. ``levels[0][1].A``.
+        weights: Positive weights or a metric: entries must also be at least
+            ``1 / MAX_MAGNITUDE``.
+
+    Raises:
+        InputError: naming the first entry out of range, its index and the accepted range.
+    """
+    size = np.abs(values)
+    bad = np.isfinite(size) & (size > MAX_MAGNITUDE)
+    if weights:
+        bad |= size < _MIN_WEIGHT
+    if not bad.any():
+        return
+    flat = int(np.flatnonzero(bad.reshape(-1))[0])
+    index = np.unravel_index(flat, values.shape)
+    where = int(index[0]) if len(index) == 1 else tuple(int(i) for i in index)
+    accepted = (f"within [{_MIN_WEIGHT:g}, {MAX_MAGNITUDE:g}]" if weights
+                else f"at most {MAX_MAGNITUDE:g} in magnitude")
+    raise InputError(f"{name}: entry {values.reshape(-1)[flat]:.6g} at index {where} is out of "
+                     f"range (accepted: {accepted}); scale the problem, e.g. other units")
 
 
 def _float(value: Any) -> FloatArray:
@@ -121,16 +168,25 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
 def _as_rows(item: Any, label: str) -> Rows:
     """One item (Rows, (A, b) or (A, lo, hi)) validated; raises the error naming ``label``."""
     if isinstance(item, Rows):
-        name = f"{label} ({item.name})" if item.name else label
-        return Rows.validated(item.A, item.lower, item.upper, item.weights, name)
-    if isinstance(item, tuple | list) and len(item) == 2:
-        return Rows.equality(item[0], item[1], name=label)
-    if isinstance(item, tuple | list) and len(item) == 3:
-        return Rows.inequality(item[0], item[1], item[2], name=label)
-    raise InputError(
-        f"{label}: expected Rows, an (A, b) pair or an (A, lo, hi) triple, "
-        f"got {type(item).__name__}"
-    )
+        label = f"{label} ({item.name})" if item.name else label
+        rows = Rows.validated(item.A, item.lower, item.upper, item.weights, label)
+    elif isinstance(item, tuple | list) and len(item) == 2:
+        rows = Rows.equality(item[0], item[1], name=label)
+        check_magnitude(rows.A, f"{label}.A")
+        check_magnitude(rows.lower, f"{label}.b")
+    elif isinstance(item, tuple | list) and len(item) == 3:
+        rows = Rows.inequality(item[0], item[1], item[2], name=label)
+    else:
+        raise InputError(
+            f"{label}: expected Rows, an (A, b) pair or an (A, lo, hi) triple, "
+            f"got {type(item).__name__}"
+        )
+    check_magnitude(rows.A, f"{label}.A")
+    check_magnitude(rows.lower, f"{label}.lower")
+    check_magnitude(rows.upper, f"{label}.upper")
+    if rows.weights is not None:
+        check_magnitude(rows.weights, f"{label}.weights", weights=True)
+    return rows
 
 
 def _level_rows(items: Any, n: int | None, label: str) -> tuple[list[Rows], int | None]:
@@ -174,6 +230,8 @@ def _one_by_one(levels: Any, lower: Any, upper: Any, hard: Any, n: int | None
     check_bounds_order(lo, hi, "bounds")
     if np.any(lo == np.inf) or np.any(hi == -np.inf):
         raise InputError("bounds: a lower bound is +inf or an upper bound is -inf")
+    check_magnitude(lo, "lower")
+    check_magnitude(hi, "upper")
     every = [*hard_rows, *[r for rows in per_level for r in rows]]
     parsed = ([r.A for r in every], [r.lower for r in every], [r.upper for r in every],
               [r.weights for r in every], len(hard_rows), [sum(r.m for r in rows)
@@ -250,11 +308,11 @@ class Validator:
             np.concatenate(As, out=problem.A[width:])
         np.concatenate((lo_box, *los, hi_box, *his), out=self._flat)
         if not checked and not sides_and_rows_ok(problem):
-            _one_by_one(levels, lower, upper, hard, width)  # raises, or the sums overflowed
+            _one_by_one(levels, lower, upper, hard, width)  # raises, or a sum only looked bad
         if weighted:
             w = np.concatenate([w if w is not None else np.ones(A.shape[0])
                                 for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
-            if not (math.isfinite(float(w.sum())) and _MIN(w) > 0.0):
+            if not (_MIN(w) >= _MIN_WEIGHT and _MAX(w) <= MAX_MAGNITUDE):  # False on NaN
                 _one_by_one(levels, lower, upper, hard, width)  # names the rows at fault
             problem.set_weights(w)
             self._ones = False
@@ -281,9 +339,23 @@ def finite_ok(problem: Problem) -> bool:
 
 
 def sides_and_rows_ok(problem: Problem) -> bool:
-    """:func:`finite_ok`, and no lower side above its upper side."""
-    return finite_ok(problem) and not np.count_nonzero(
-        np.greater(problem.lo, problem.hi, out=problem.flags))
+    """Legitimate sides, rows within the accepted magnitudes, no lower side above its upper.
+
+    ``vdot(A, A) <= MAX_MAGNITUDE**2`` holds when every entry is in range (and is false on NaN
+    or inf); a false alarm (many entries near the limit) is cleared by the detailed check. The
+    sides' largest finite magnitude is one masked reduction.
+    """
+    v = float(np.vdot(problem.sides, problem.signs))
+    if not (v == -math.inf or math.isfinite(v)):
+        return False
+    rows = problem.A[problem.n:]
+    if rows.size and not float(np.vdot(rows, rows)) <= _MAX_SQUARE:
+        return False
+    sides = problem.sides
+    if not _MAX(np.abs(sides), axis=None, where=np.isfinite(sides), initial=0.0) <= (
+            MAX_MAGNITUDE):
+        return False
+    return not np.count_nonzero(np.greater(problem.lo, problem.hi, out=problem.flags))
 
 
 def normalize_problem(levels: Any, lower: Any = None, upper: Any = None, weights: Any = None,
@@ -305,4 +377,5 @@ def normalize_problem(levels: Any, lower: Any = None, upper: Any = None, weights
     problem = Validator()(levels, lower, upper, hard, None, n)
     if weights is not None:
         problem.W = as_vector(weights, "weights", problem.n, positive=True)
+        check_magnitude(problem.W, "weights", weights=True)
     return problem

@@ -21,6 +21,14 @@ stage                  what it does
                        stage succeeds again (every solver stage is still tried on every step)
 =====================  =====================================================================
 
+An answer that is feasible but not proven optimal (status ``unproven``: the optimality
+certificate failed and the solver's repair could not fix it) is kept while the ``cold_retry`` and
+``alternate`` stages look for a proven one; if none is found it is the command (its stage and
+its ``unproven`` status say so), before any stage that drops levels or degrades the command. An
+ill-posed level (the certificate's ``ill_posed``: no solver can do better) and a scheme that
+takes its primary's unproven answers as they are (``accept_unproven``, a closed form) stop at
+the primary.
+
 Stages after ``alternate`` degrade the command; in strict mode they are not taken and
 :class:`~uvms_qp.errors.NoSolutionFound` is raised instead (carrying the failed result). A hard set
 that is empty (confirmed by an independent LP) skips every solver stage. Once the step's deadline
@@ -28,8 +36,9 @@ has passed (:mod:`uvms_qp.safety.deadline`) the remaining solver stages are skip
 Whatever the stage, the returned command lies inside the box (exactly: a final clip,
 :func:`uvms_qp.hqp.measure.clip_to_box`, whose amount is reported), and
 :attr:`SafeSolve.result` is the measurement of that command against the *full* problem, so
-per-level residuals and the status are truthful: ``optimal`` / ``level_infeasible`` only for
-solver stages, ``backend_error`` (or ``hard_infeasible``) for the decayed, zero and hold stages.
+per-level residuals and the status are truthful: ``optimal`` / ``level_infeasible`` (proven) or
+``unproven`` only for solver stages, ``backend_error`` (or ``hard_infeasible``) for the decayed,
+zero and hold stages.
 """
 
 from __future__ import annotations
@@ -56,8 +65,11 @@ DECAYED = "decayed_previous"
 ZERO = "zero"
 HOLD_ZERO = "hold_zero"
 
-_OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
+_OPTIMAL, _LEVEL_INFEASIBLE, _UNPROVEN = Status.OPTIMAL, Status.LEVEL_INFEASIBLE, Status.UNPROVEN
 _VALUES = {status: status.value for status in Status}  # without the enum's property per step
+
+#: Default cap of one solve of a solver stage [s] (no cascade solve past it at n <= 30).
+TIME_CAP = 0.05
 
 #: Every stage name, in ladder order.
 STAGES: tuple[str, ...] = (PRIMARY, COLD_RETRY, ALTERNATE, RELAXED, DECAYED, ZERO, HOLD_ZERO)
@@ -152,7 +164,14 @@ class SafeSolver:
         clip_flag_tol: Clip amount above which a clip is flagged [m/s, rad/s].
         saturate: Clip the primary's answers into the box before measuring them (a closed form
             that cannot enforce the box: its command is the saturated closed form).
-        clock: Wall clock [s] (``time.perf_counter``; a test may pass a fake one).
+        accept_unproven: The primary's ``unproven`` answers are the command as they are (a
+            closed form, whose answer is what the scheme is); False: the next solver stages
+            look for a proven answer first.
+        time_cap: Cap of each solve of a solver stage [s] on ``clock`` (:data:`TIME_CAP`; an
+            ``options["time_cap"]`` overrides it for the primary): a cascade starts no QP past
+            it and reports ``backend_error``, a repair gives up, and the ladder goes on.
+        clock: Wall clock [s] (``time.perf_counter``; a test may pass a fake one); also the
+            clock of the solvers' time caps.
 
     Attributes:
         primary: The primary :class:`~uvms_qp.hqp.HierarchySolver`.
@@ -170,6 +189,7 @@ class SafeSolver:
                  deadline: float | None = None, max_fallbacks: int = 3, decay: float = 0.5,
                  relax: bool = True, strict: bool = False,
                  clip_flag_tol: float = CLIP_FLAG_TOL, saturate: bool = False,
+                 accept_unproven: bool = False, time_cap: float = TIME_CAP,
                  clock: Callable[[], float] = time.perf_counter) -> None:
         self.deadline = None if deadline is None else as_scalar(
             deadline, "deadline", positive=True, allow_inf=True)
@@ -184,7 +204,7 @@ class SafeSolver:
         self.relax = bool(relax)
         self.strict = bool(strict)
         self.saturate = bool(saturate)
-        self._clock = clock
+        self.accept_unproven = bool(accept_unproven)
         self._budget = float("inf") if self.deadline is None else self.deadline
         options = {} if options is None else options
         if not isinstance(options, dict):
@@ -201,18 +221,25 @@ class SafeSolver:
                 alternate = None
         self.alternate: HierarchySolver | None = None if alternate is None else HierarchySolver(
             alternate, weights, backend_limits(alternate, self.deadline))
+        self.time_cap = as_scalar(time_cap, "time_cap", positive=True, allow_inf=True)
+        if "time_cap" not in options:
+            self.primary.time_cap = self.time_cap
+        if self.alternate is not None:
+            self.alternate.time_cap = self.time_cap
         self._guards: list[CascadeGuard] = []
         if self.deadline is not None:
             for hs in (self.primary, self.alternate):
                 guard = None if hs is None else guard_cascade(hs.backend, clock)
                 if guard is not None:
                     self._guards.append(guard)
+        self.clock = clock  # the deadline's, the guards' and the solvers' time caps'
         self.previous: FloatArray | None = None
         self.consecutive = 0
         self.stage_counts: Counter[str] = Counter()
         self.status_counts: Counter[str] = Counter()
         self._relaxed: dict[int, tuple[Problem, Problem]] = {}
         self._failed: HierarchyResult | None = None
+        self._unproven: tuple[HierarchyResult, str] | None = None  # first unproven answer
 
     @property
     def clock(self) -> Callable[[], float]:
@@ -222,6 +249,9 @@ class SafeSolver:
     @clock.setter
     def clock(self, clock: Callable[[], float]) -> None:
         self._clock = clock
+        for hs in (self.primary, self.alternate):
+            if hs is not None:
+                hs.clock = clock
         for guard in self._guards:
             guard.clock = clock
 
@@ -263,7 +293,7 @@ class SafeSolver:
         for guard in self._guards:
             guard.end = end
         attempts: list[str] = []
-        self._failed = None
+        self._failed = self._unproven = None
         result = self._attempt(self.primary, problem, PRIMARY, attempts)
         if result is not None:
             if result.hard_violation or self.saturate:
@@ -276,6 +306,9 @@ class SafeSolver:
             elapsed = self._clock() - start
             return SafeSolve(result.x, result, PRIMARY, (), 0.0, False, elapsed > self._budget,
                              0, elapsed)
+        kept = self._unproven
+        if kept is not None and (self.accept_unproven or _ill_posed(kept[0])):
+            return self._solved(problem, kept[0], PRIMARY, attempts, start, 0)
         failed = self._failed
         infeasible = (failed is not None and failed.status == Status.HARD_INFEASIBLE
                       and not hard_feasible(problem))
@@ -303,6 +336,8 @@ class SafeSolver:
         status = result.status
         if status is _OPTIMAL or status is _LEVEL_INFEASIBLE:
             return result
+        if status is _UNPROVEN and self._unproven is None:
+            self._unproven = (result, stage.split(" ", 1)[0])
         self._failed = result
         attempts.append(f"{stage}: {result.status.value}"
                         + (f" ({result.message})" if result.message else ""))
@@ -313,7 +348,7 @@ class SafeSolver:
         clock = self._clock
         if clock() > end:
             attempts.append("deadline passed: solver stages skipped")
-            return None
+            return self._kept_unproven(problem, attempts, start)
         self.primary.reset()
         result = self._attempt(self.primary, problem, COLD_RETRY, attempts)
         if result is not None:
@@ -322,10 +357,13 @@ class SafeSolver:
         if alternate is not None:
             if clock() > end:
                 attempts.append("deadline passed: solver stages skipped")
-                return None
+                return self._kept_unproven(problem, attempts, start)
             result = self._attempt(alternate, problem, f"{ALTERNATE} {alternate.name}", attempts)
             if result is not None:
                 return self._solved(problem, result, ALTERNATE, attempts, start, 0)
+        if self._unproven is not None:  # feasible, not proven: better than dropping levels
+            kept, stage = self._unproven
+            return self._solved(problem, kept, stage, attempts, start, 0)
         if not self.relax or self.strict:
             return None
         p = len(problem.sizes)
@@ -343,9 +381,17 @@ class SafeSolver:
                                 f"{result.solver} ({keep} of {p} levels)",
                                 f"relaxed: lowest {p - keep} level(s) dropped", result.info,
                                 level_tol=self.primary.level_tol, hard_tol=self.primary.hard_tol,
-                                solve_time=result.solve_time)
+                                solve_time=result.solve_time, certify=self.primary.certify)
                 return self._solved(problem, full, RELAXED, attempts, start, p - keep)
         return None
+
+    def _kept_unproven(self, problem: Problem, attempts: list[str], start: float
+                       ) -> SafeSolve | None:
+        """The first unproven answer of this step as the command (None when there is none)."""
+        if self._unproven is None:
+            return None
+        kept, stage = self._unproven
+        return self._solved(problem, kept, stage, attempts, start, 0)
 
     def _solved(self, problem: Problem, result: HierarchyResult, stage: str,
                 attempts: list[str], start: float, dropped: int) -> SafeSolve:
@@ -357,7 +403,8 @@ class SafeSolver:
                 clipped = max(clipped, extra)
                 result = evaluate(problem, sat, Status.OPTIMAL, result.solver, result.message,
                                   result.info, level_tol=self.primary.level_tol,
-                                  hard_tol=self.primary.hard_tol, solve_time=result.solve_time)
+                                  hard_tol=self.primary.hard_tol, solve_time=result.solve_time,
+                                  certify=self.primary.certify)
                 x = sat
         self.previous = x
         self.consecutive = 0
@@ -401,3 +448,9 @@ def fallback_summary(counts: Counter[str]) -> str:
     total = sum(counts.values()) or 1
     return ", ".join(f"{s}: {counts[s]} ({100.0 * counts[s] / total:.3g} %)"
                      for s in STAGES if counts.get(s))
+
+
+def _ill_posed(result: HierarchyResult) -> bool:
+    """True when the result's first unproven level is ill-posed (no solver can do better)."""
+    cert = result.certificate
+    return cert is not None and cert.ill_posed

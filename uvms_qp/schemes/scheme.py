@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from .._validation import FloatArray, as_scalar
+from .._validation import FloatArray, as_scalar, as_time
 from ..controller import StepResult, not_a_state
 from ..errors import InputError, NonFiniteError
 from ..hqp import Status
@@ -110,10 +110,12 @@ class Scheme(ABC):
         """Compute the rates ``zeta`` for ``state`` at time ``t`` [s].
 
         Raises:
-            InputError: the scheme is not bound, its trajectory was never set, or ``state`` is
-                not a State (e.g. a configuration array).
-            NonFiniteError: the formula produced NaN or inf (never silently passed on).
+            InputError: the scheme is not bound, its trajectory was never set, ``state`` is
+                not a State (e.g. a configuration array), or ``t`` is not a real number.
+            NonFiniteError: the formula produced NaN or inf (never silently passed on), or ``t``
+                is NaN or inf.
         """
+        t = as_time(t)
         if self.model is None:
             raise InputError(f"{self.name}: call bind(model, dt) before step()")
         if not hasattr(state, "model"):
@@ -121,11 +123,11 @@ class Scheme(ABC):
         if self.needs_trajectory and self.trajectory is None:
             raise InputError(f"{self.name}: no trajectory set; call track(trajectory) first")
         start = time.perf_counter()
-        zeta, residuals = self._compute(state, float(t))
+        zeta, residuals = self._compute(state, t)
         elapsed = time.perf_counter() - start
         if not np.all(np.isfinite(zeta)):
             raise NonFiniteError(f"{self.name}: the scheme produced non-finite rates at t = {t}")
-        return _make_result(self.name, zeta, residuals, elapsed, float(t))
+        return _make_result(self.name, zeta, residuals, elapsed, t)
 
     @abstractmethod
     def _bind(self, model: Model) -> None:

@@ -38,7 +38,11 @@ from .results import write_results
 from .runner import SimulationResult, simulate
 from .scenario import Scenario, load_scenario
 
-#: Rows of the comparison table: (metric key, unit, format).
+#: Unit of a table metric whose value is a dict by unit (one row per unit).
+BY_UNIT = "by unit"
+#: Rows of the comparison table: (metric key, unit). A metric of :data:`PER_KEY` (a dict) gets one
+#: row per key: ``"key (sub)"`` in ``unit``, or ``key`` in the unit ``sub`` for :data:`BY_UNIT`;
+#: other dicts (counts per stage or status) fill one row.
 TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("ee_error_max", "m"),
     ("ee_error_rms", "m"),
@@ -55,9 +59,19 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("payload_objective_max", "N m^2"),
     ("tool_base_radius_max", "m"),
     ("tool_base_radius_mean", "m"),
+    ("command_reversals_per_s_max", "1/s"),
+    ("command_reversals_worst_axis", ""),
+    ("command_change_max", BY_UNIT),
+    ("settling_time", "s"),
     ("step_time_median_us", "us"),
     ("nan_steps", ""),
+    ("unproven_steps", ""),
+    ("stage_counts", "steps"),
+    ("status_counts", "steps"),
 )
+
+#: Dict-valued table metrics with one row per key (by unit, by task).
+PER_KEY = ("command_change_max", "settling_time")
 
 #: Metrics left out for a scheme that follows no tool trajectory (``needs_trajectory = False``).
 UNTRACKED_METRICS = ("ee_error_max", "ee_error_rms", "ee_error_final")
@@ -144,11 +158,21 @@ class Comparison:
         raise KeyError(f"no run of scheme {name!r}; runs: {', '.join(r.name for r in self.runs)}")
 
     def table(self) -> list[tuple[str, str, list[Any]]]:
-        """Rows ``(metric, unit, values per run)`` for metrics present in at least one run."""
-        rows = []
+        """Rows ``(metric, unit, values per run)`` for metrics present in at least one run.
+
+        A metric of :data:`PER_KEY` (settling time by task, command change by unit) gives one
+        row per key, in the order the runs name them.
+        """
+        rows: list[tuple[str, str, list[Any]]] = []
         for key, unit in TABLE_METRICS:
             values = [run.metrics.get(key) for run in self.runs]
-            if any(v is not None for v in values):
+            if key in PER_KEY and any(isinstance(v, dict) for v in values):
+                subs = list(dict.fromkeys(k for v in values if isinstance(v, dict) for k in v))
+                for sub in subs:
+                    cells = [v.get(sub) if isinstance(v, dict) else None for v in values]
+                    rows.append((key, sub, cells) if unit == BY_UNIT
+                                else (f"{key} ({sub})", unit, cells))
+            elif any(v is not None for v in values):
                 rows.append((key, unit, values))
         return rows
 
@@ -226,7 +250,8 @@ class Comparison:
         table = {
             "scenario": self.scenario,
             "schemes": [run.name for run in self.runs],
-            "metrics": {key: {"unit": unit, "values": [_json_value(v) for v in values]}
+            "metrics": {_json_key(key, unit): {"unit": unit,
+                                               "values": [_json_value(v) for v in values]}
                         for key, unit, values in self.table()},
             "exceeds_hard_bounds": [self.exceeds_bounds(run) for run in self.runs],
             "notes": self.notes(),
@@ -237,9 +262,11 @@ class Comparison:
 
 
 def format_value(value: Any) -> str:
-    """Compact text of a metric value for tables."""
+    """Compact text of a metric value for tables (counts: ``primary 598, alternate 2``)."""
     if value is None:
         return "-"
+    if isinstance(value, dict):
+        return ", ".join(f"{key} {format_value(count)}" for key, count in value.items())
     if isinstance(value, bool | int | np.integer):
         return str(int(value))
     if isinstance(value, float | np.floating):
@@ -257,6 +284,12 @@ def _json_value(value: Any) -> Any:
     if isinstance(value, dict):
         return {k: _json_value(v) for k, v in value.items()}
     return value
+
+
+def _json_key(key: str, unit: str) -> str:
+    """The key of a table row in ``comparison.json`` (a row by unit carries its unit)."""
+    by_unit = any(k == key and u == BY_UNIT for k, u in TABLE_METRICS)
+    return f"{key} ({unit})" if by_unit else key
 
 
 def _json_list(values: FloatArray) -> list[float | None]:

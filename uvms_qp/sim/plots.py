@@ -8,7 +8,8 @@ One file per topic, each drawn only when the run has something to show:
 - ``joints.png``: joint positions, with their limits dashed when the joints have limits;
 - ``manipulability.png``: the measure in its unit, with the manipulability task's floor;
 - ``rates.png``: the command, every entry of zeta in its unit, with its hard box shaded (the
-  intersection of every constraint's bounds at each step);
+  intersection of every constraint's bounds at each step) and, with command-rate bounds, the
+  window ``zeta_(k-1) +/- a_max dt`` they allowed at each step (green dotted);
 - ``residuals.png``: per-level residual norms (log scale), levels numbered from 0 as in
   the ``summary()`` of a solve and of a control step;
 - ``payload_moment.png``: with a payload task.
@@ -188,6 +189,10 @@ def _rates(result: SimulationResult) -> Any:
             ax.fill_between(ts, np.where(np.isfinite(lower), lower, np.nan),
                             np.where(np.isfinite(upper), upper, np.nan),
                             color="tab:red", alpha=0.08, linewidth=0)
+        window = _rate_window(result, i)
+        if window is not None:
+            for side in window:
+                ax.plot(ts, side, ":", color="tab:green", linewidth=0.9)
         ax.set_ylabel(f"{result.zeta_names[i]} [{units[i]}]")
         min_span(ax, np.concatenate(shown), RATE_SPAN)
         _events(ax, result)
@@ -196,8 +201,25 @@ def _rates(result: SimulationResult) -> Any:
     for col in range(cols):  # the lowest drawn panel of each column carries the time axis
         last = max(i for i in range(nv) if i % cols == col) // cols
         time_axis(axes[last, col])
-    fig.suptitle(f"{result.scenario}: command zeta and its hard box (red dashed, shaded)")
+    title = f"{result.scenario}: command zeta and its hard box (red dashed, shaded)"
+    if result.command_rate_limit is not None:
+        title += "\nand the command-rate window (green dotted)"
+    fig.suptitle(title)
     return fig
+
+
+def _rate_window(result: SimulationResult, i: int) -> tuple[Any, Any] | None:
+    """``zeta_(k-1) -/+ a_max dt`` of entry ``i`` per step, or None where it is not bounded."""
+    limit = result.command_rate_limit
+    if limit is None or not np.isfinite(limit[i]):
+        return None
+    column = result.zeta[:, i]
+    previous = np.empty_like(column)
+    previous[1:] = column[:-1]
+    start = result.command_initial
+    previous[0] = np.nan if start is None else start[i]
+    step = limit[i] * result.dt
+    return previous - step, previous + step
 
 
 def _residuals(result: SimulationResult) -> Any:

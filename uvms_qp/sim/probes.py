@@ -14,6 +14,9 @@
 - Tool tracking: the tracked task's frame pose and its target (``task.target(t)``).
 - Heading: the target heading of a current-alignment task (``heading + offset``), else the
   scenario current's direction.
+- Task errors: the norm of the error ``e = x_d - x`` of every regulated task (each
+  :class:`~uvms_qp.tasks.ErrorTask` of the stack, ``task.compute_error(state, t)``) [its
+  ``error_unit``], whatever scheme commands the run: the settling times come from them.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..tasks.manipulability import default_rows
+from ..tasks.task import ErrorTask
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..stack import Stack
@@ -95,6 +99,9 @@ class Probes:
         has_payload = self.payload_task is not None
         self.payload_objective = np.zeros(size) if has_payload else None
         self.payload_moment = np.zeros(size) if has_payload else None
+        self.regulated = [t for t in stack.tasks if isinstance(t, ErrorTask)]
+        self.task_errors = {t.name: np.full(size, np.nan) for t in self.regulated}
+        self.task_error_units = {t.name: str(t.error_unit) for t in self.regulated}
 
     def record(self, k: int, state: Any, t: float) -> None:
         """Record state ``k`` at time ``t`` [s]."""
@@ -123,6 +130,9 @@ class Probes:
             objective = float(self.payload_task.compute_value(state)[0])
             self.payload_objective[k] = objective
             self.payload_moment[k] = float(np.sqrt(max(objective, 0.0) * self.payload_task.force))
+        for task in self.regulated:
+            e = task.compute_error(state, t)
+            self.task_errors[task.name][k] = float(np.sqrt(e @ e))
 
     def arrays(self) -> dict[str, Any]:
         """The recorded arrays by name (``yaw`` and the payload series only when defined)."""

@@ -8,14 +8,17 @@ scenario phase), ``events`` (applied run-time changes) and ``series``:
   ``joints`` [rad or m, ``joint_units``], ``ee_pose`` (tracked frame
   ``[x, y, z, qx, qy, qz, qw]``, world), ``target_position`` [m], ``manipulability``
   [``manipulability_unit``], ``manipulability_floor`` (with a floor task), ``payload_moment``
-  [N m] and ``payload_objective`` [N m^2] (when set);
+  [N m] and ``payload_objective`` [N m^2] (when set), ``task_errors`` (error norm of every
+  regulated task, by name; units in ``task_error_units``);
 - per step (N entries, at ``time[:N]``): ``zeta`` (names in ``zeta_names``, units in
   ``zeta_units``: m/s, rad/s),
   ``zeta_lower``/``zeta_upper`` (hard box, ``null`` = unbounded), ``step_time_us``, ``status``,
   ``level_residuals``, ``bound_violation``, ``task_residuals`` (by task name, units in
   ``task_units``), ``stage`` (fallback stage that produced the command, ``"primary"`` on the
   happy path; :data:`uvms_qp.safety.STAGES`), ``clipped`` (amount the final saturation removed
-  [m/s, rad/s]) and ``deadline_missed`` (booleans).
+  [m/s, rad/s]) and ``deadline_missed`` (booleans);
+- ``command_rate_limit``: the acceleration bound of each entry of zeta [m/s^2, rad/s^2] of the
+  stack's command-rate bounds (``null`` where none), when the stack has them.
 
 ``metrics`` also holds ``stage_counts`` (steps per stage), ``deadline_missed_steps`` and
 ``clipped_max``.
@@ -182,6 +185,10 @@ def results_dict(result: SimulationResult, *, series: bool = True,
             record["payload_moment"] = result.payload_moment
         if result.payload_objective is not None:
             record["payload_objective"] = result.payload_objective
+        record["task_errors"] = result.task_errors
+        record["task_error_units"] = result.task_error_units
+        if result.command_rate_limit is not None:
+            record["command_rate_limit"] = result.command_rate_limit
         data["series"] = record
     return _clean(data)  # type: ignore[no-any-return]
 

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
+from ..constraints import CommandRateBounds, intersect_boxes
 from ..hqp import hard_violation
 from ..safety import STAGES
 from ..stack import Stack
@@ -95,6 +96,14 @@ class SimulationResult:
         manipulability_unit: Unit of ``manipulability`` (``"m^k"`` for k position rows).
         manipulability_floor: Floor of the manipulability task per state (N+1,) (NaN while
             none), or None without a floor task.
+        task_errors: Error norm of every regulated task per state (N+1,) by task name
+            (:class:`~uvms_qp.sim.probes.Probes`), units in ``task_error_units``.
+        task_error_units: Unit of each regulated task's error.
+        command_rate_limit: Acceleration bound of each entry of zeta (nv,) [m/s^2, rad/s^2] of
+            the stack's :class:`~uvms_qp.constraints.CommandRateBounds` (the tightest when
+            several; ``inf`` where none), or None without them.
+        command_initial: The previous command of the first step those bounds assumed (nv,)
+            (zero: at rest), or None (free first step or no such bounds).
     """
 
     scenario: str
@@ -143,6 +152,10 @@ class SimulationResult:
     joint_units: tuple[str, ...] = ()
     manipulability_unit: str = ""
     manipulability_floor: FloatArray | None = None
+    task_errors: dict[str, FloatArray] = field(default_factory=dict)
+    task_error_units: dict[str, str] = field(default_factory=dict)
+    command_rate_limit: FloatArray | None = None
+    command_initial: FloatArray | None = None
 
     def metrics(self) -> dict[str, Any]:
         """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`) and the fallback ones.
@@ -177,21 +190,13 @@ class SimulationResult:
 
 def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: FloatArray,
                           lower: FloatArray, upper: FloatArray) -> float:
-    """Largest violation of the constraints' hard rows by ``zeta``; fills the box into lower/upper.
+    """Largest violation by ``zeta`` of the box ``lower``/``upper`` and the constraints' hard rows.
 
-    The box of several constraints is their intersection; the violation is
-    :func:`uvms_qp.hqp.hard_violation` of the box and rows rebuilt from the constraint objects.
+    The box is the one :func:`~uvms_qp.constraints.intersect_boxes` gave before the step; the
+    violation is :func:`uvms_qp.hqp.hard_violation` of that box and of the hard rows rebuilt
+    from the constraint objects.
     """
-    lower.fill(-np.inf)
-    upper.fill(np.inf)
-    rows = []
-    for constraint in constraints:
-        if constraint.has_box:
-            lo, hi = constraint.box(state, dt)
-            np.maximum(lower, lo, out=lower)
-            np.minimum(upper, hi, out=upper)
-        if constraint.rows_dim:
-            rows.append(constraint.rows(state, dt))
+    rows = [constraint.rows(state, dt) for constraint in constraints if constraint.rows_dim]
     if not rows:
         return hard_violation(zeta, lower, upper)
     return hard_violation(zeta, lower, upper, np.vstack([r.A for r in rows]),
@@ -274,6 +279,11 @@ def simulate(
     n_levels = len(stack.levels)
     probes = Probes(scenario, stack, n + 1)
     constraints = list(stack.constraints)
+    for constraint in constraints:  # the run starts from the constraints' initial memory
+        constraint.reset()
+    rate_bounds = [c for c in constraints if isinstance(c, CommandRateBounds)]
+    rate_limit = (np.min([c.limits for c in rate_bounds], axis=0) if rate_bounds else None)
+    initial = next((c.previous for c in rate_bounds if c.previous is not None), None)
     n_lin = sum(1 for dof in getattr(model, "actuated", ()) if dof in ("u", "v", "w"))
 
     time: FloatArray = np.arange(n, dtype=np.float64) * dt
@@ -316,6 +326,7 @@ def simulate(
         state = model.state(q)
         q_log[k] = q
         probes.record(k, state, t)
+        intersect_boxes(constraints, state, dt, lower_log[k], upper_log[k])
         result = scheme.step(state, t)
         zeta = np.asarray(result.zeta, dtype=np.float64)
         if zeta.shape != (nv,) or not np.all(np.isfinite(zeta)):
@@ -342,6 +353,8 @@ def simulate(
         violation[k] = _constraint_violation(
             constraints, state, dt, zeta, lower_log[k], upper_log[k]
         )
+        for constraint in constraints:  # a scheme other than the controller may not tell them
+            constraint.command_sent(zeta)
         speed[k] = float(np.linalg.norm(zeta[:n_lin])) if n_lin else 0.0
         q = scenario.integrator.step(q, zeta, dt, t, rates)
         bar.update(k + 1)
@@ -398,4 +411,8 @@ def simulate(
         joint_units=joint_units(model),
         manipulability_unit=probes.manipulability_unit,
         manipulability_floor=data.get("manipulability_floor"),
+        task_errors=probes.task_errors,
+        task_error_units=probes.task_error_units,
+        command_rate_limit=rate_limit,
+        command_initial=initial,
     )

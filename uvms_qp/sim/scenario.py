@@ -50,6 +50,7 @@ from .stack_tables import (
     StackTables,
     TaskResolver,
     apply_events,
+    check_periods,
     read_events,
     read_stack,
     read_trajectories,
@@ -67,7 +68,8 @@ _SCENARIO_PACKAGE = "uvms_qp.scenarios"
 #: Keys of the top-level table (``docs/scenarios.md``); a required key is reported missing only
 #: when no other key is unknown, so a misspelt ``duration`` is named as the unknown key.
 _TOP_KEYS = (
-    "name", "description", "model", "dt", "duration", "solver", "strict", "deadline", "metric",
+    "name", "description", "model", "dt", "duration", "solver", "strict", "deadline", "damping",
+    "metric",
     "schemes", "scheme_options", "integrator", "initial", "current", "passive", "trajectories",
     "constraints", "levels", "events", "tracking", "phases",
 )
@@ -157,6 +159,8 @@ class Scenario:
         strict: The controller raises :class:`~uvms_qp.errors.NoSolutionFound` instead of
             degrading when no back-end returns a verified solution (``docs/reliability.md``).
         deadline: Wall-time budget of one controller step [s], or None for none.
+        damping: The controller's damping threshold of the levels that set none, or None for
+            the library's (:data:`uvms_qp.hqp.damping.DEFAULT_THRESHOLD`).
         schemes: Schemes to compare (``"hqp"`` always first).
         scheme_options: Keyword arguments of each listed closed-form scheme, by scheme name.
         integrator: The configured :class:`~uvms_qp.sim.integrators.Integrator` (stateless).
@@ -195,6 +199,7 @@ class Scenario:
     task_names: tuple[tuple[str, ...], ...]
     source: Path | None
     stack_source: Callable[[], Stack] = field(repr=False)
+    damping: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "q0", _read_only(self.q0))
@@ -220,7 +225,8 @@ class Scenario:
                         ) -> Controller:
         """A :class:`~uvms_qp.controller.Controller` with this scenario's settings.
 
-        The controller gets the scenario's ``dt``, ``metric``, ``strict`` and ``deadline``.
+        The controller gets the scenario's ``dt``, ``metric``, ``strict``, ``deadline`` and
+        ``damping``.
 
         Args:
             solver: Override of the scenario's solver.
@@ -231,6 +237,7 @@ class Scenario:
             self.model, self.build_stack() if stack is None else stack,
             solver=solver or self.solver, dt=self.dt, metric=self.metric, strict=self.strict,
             deadline=self.deadline,
+            **({} if self.damping is None else {"damping": self.damping}),
         )
 
     def with_duration(self, duration: Any, path: str = "duration") -> Scenario:
@@ -263,6 +270,7 @@ class Scenario:
         description: str = "",
         strict: bool = False,
         deadline: float | None = None,
+        damping: float | None = None,
         schemes: Sequence[str] = ("hqp",),
         scheme_options: Mapping[str, Mapping[str, Any]] | None = None,
     ) -> Scenario:
@@ -288,6 +296,7 @@ class Scenario:
             description: Free text.
             strict: Raise instead of degrading when no back-end solves a step.
             deadline: Wall-time budget of one controller step [s], or None.
+            damping: Damping threshold of the controller's levels (None: the library's).
             schemes: Schemes ``compare`` runs (``"hqp"`` is the stack).
             scheme_options: Keyword arguments of listed closed-form schemes, by scheme name.
 
@@ -336,6 +345,7 @@ class Scenario:
                                                          positive=True),
             strict=bool(strict),
             deadline=None if deadline is None else as_scalar(deadline, "deadline", positive=True),
+            damping=None if damping is None else as_scalar(damping, "damping", nonnegative=True),
             schemes=names,
             scheme_options=options,
             integrator=integrator or Integrator(model, current=current),
@@ -625,6 +635,7 @@ def scenario_from_dict(
     solver = _check_solver(top)
     strict = top.take_bool("strict", False)
     deadline = top.take_number("deadline", None, positive=True)
+    damping = top.take_number("damping", None, nonnegative=True)
     metric_list = top.take_numbers("metric", size=int(model.nv))
     metric = None
     if metric_list is not None:
@@ -676,7 +687,9 @@ def scenario_from_dict(
         task_names=tuple(level.names for level in stack.levels),
         source=source,
         stack_source=tables,
+        damping=damping,
     )
+    check_periods(tables, stack, dt)
     scenario._check_objects(stack)
     try:
         scenario.make_controller(stack=stack)

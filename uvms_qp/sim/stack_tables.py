@@ -97,14 +97,18 @@ class StackTables:
     Attributes:
         levels: Task items per level, highest priority first.
         constraints: Constraint items.
+        damping: Each level's damping threshold (None: the controller's).
     """
 
     levels: tuple[tuple[Item, ...], ...]
     constraints: tuple[Item, ...] = field(default=())
+    damping: tuple[float | None, ...] = field(default=())
 
     def __call__(self) -> Stack:
         """A new, unbound :class:`~uvms_qp.stack.Stack` (new task and constraint objects)."""
-        return Stack(levels=[Level(*(item.build() for item in level)) for level in self.levels],
+        damping = self.damping or (None,) * len(self.levels)
+        return Stack(levels=[Level(*(item.build() for item in level), damping=d)
+                             for level, d in zip(self.levels, damping, strict=True)],
                      constraints=[item.build() for item in self.constraints])
 
 
@@ -217,13 +221,15 @@ def read_stack(
         constraints.append(constraint)
 
     level_items: list[tuple[Item, ...]] = []
+    level_damping: list[float | None] = []
     levels: list[list[Any]] = []
     items_by_name: dict[str, Item] = {}
-    level_tables = top.take_tables("levels", required=True, keys=("tasks",))
+    level_tables = top.take_tables("levels", required=True, keys=("tasks", "damping"))
     if not level_tables:
         raise ConfigError("expected at least one level", top.at("levels"))
     for level_table in level_tables:
         task_tables = level_table.take_tables("tasks", required=True)
+        level_damping.append(level_table.take_number("damping", None, nonnegative=True))
         level_table.finish()
         if not task_tables:
             raise ConfigError("expected at least one task in a level", level_table.at("tasks"))
@@ -254,7 +260,8 @@ def read_stack(
         levels.append(tasks)
 
     try:
-        stack = Stack(levels=[Level(*tasks) for tasks in levels], constraints=constraints)
+        stack = Stack(levels=[Level(*tasks, damping=d) for tasks, d in zip(
+            levels, level_damping, strict=True)], constraints=constraints)
         stack.bind(model)
     except (UvmsQpError, ValueError) as exc:
         raise ConfigError(str(exc), "levels") from exc
@@ -264,7 +271,7 @@ def read_stack(
                 task.rows(state, 0.0)
             except (UvmsQpError, ValueError) as exc:
                 raise _error(exc, item) from exc
-    return StackTables(tuple(level_items), tuple(constraint_items)), stack
+    return StackTables(tuple(level_items), tuple(constraint_items), tuple(level_damping)), stack
 
 
 def read_events(
@@ -327,3 +334,19 @@ def apply_events(events: Sequence[Event], stack: Stack) -> None:
             event.apply(stack)
         except (UvmsQpError, ValueError, TypeError) as exc:
             raise config_error_from(exc, event.path, list(event.update), event.update) from exc
+
+
+def check_periods(tables: StackTables, stack: Stack, dt: float) -> None:
+    """Check every task of ``stack`` against the control period ``dt`` [s].
+
+    (:meth:`~uvms_qp.tasks.Task.check_period`: set-based rows whose gain overshoots.)
+
+    Raises:
+        ConfigError: at the task's field, e.g. ``levels[1].tasks[0].gain``.
+    """
+    for level, items in zip(stack.levels, tables.levels, strict=True):
+        for task, item in zip(level.tasks, items, strict=True):
+            try:
+                task.check_period(dt)
+            except (UvmsQpError, ValueError) as exc:
+                raise _error(exc, item) from exc

@@ -38,6 +38,8 @@ class CurrentAlignmentTask(ErrorTask):
         gain: Gain K [1/s].
         weight: Weight within the level.
         name: Task name (default ``"current_alignment"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "current_alignment"
@@ -53,8 +55,9 @@ class CurrentAlignmentTask(ErrorTask):
         gain: float = 1.0,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain)
+        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
         self.offset = as_scalar(offset, f"{self.name}.offset")
         self.heading: float | None = None
         if heading is not None and direction is not None:

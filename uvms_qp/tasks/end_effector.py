@@ -87,6 +87,8 @@ class EndEffectorTask(ErrorTask):
         gain: Gain K [1/s], scalar or one per selected axis.
         weight: Weight within the level.
         name: Task name (default ``"end_effector"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "end_effector"
@@ -108,8 +110,9 @@ class EndEffectorTask(ErrorTask):
         gain: float | list[float] = 1.0,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain)
+        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
         if not isinstance(frame, str) or not frame:
             raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
         if not isinstance(reference, str) or not reference:
@@ -314,7 +317,7 @@ class EndEffectorTask(ErrorTask):
         self._R_d = np.array(T[:3, :3])
         self._v_d = self._w_d = None
 
-    def reset(self) -> None:
+    def _reset(self) -> None:
         """Forget a held pose (a new one is taken at the next evaluation)."""
         if self.hold is not None:
             self._p_d = self._R_d = None

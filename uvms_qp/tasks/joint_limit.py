@@ -12,7 +12,7 @@ from ..analytic.joint_limits import LIMIT_CLEARANCE, index_and_gradient, limit_t
 from ..errors import InputError
 from ..model.selection import check_joint_list, compact_index, joint_indices
 from ._common import check_choice
-from .task import Task
+from .task import Task, check_barrier_gain
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
@@ -52,6 +52,8 @@ class JointLimitTask(Task):
         normalize: Normalise the gradient (mode ``"gradient"``).
         weight: Weight within the level.
         name: Task name (default ``"joint_limit"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "joint_limit"
@@ -69,8 +71,9 @@ class JointLimitTask(Task):
         normalize: bool = False,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight)
+        super().__init__(name=name, weight=weight, activation=activation)
         check_choice(mode, ("gradient", "margin", "damping"), f"{self.name}.mode")
         if not isinstance(normalize, bool):
             raise InputError(f"{self.name}.normalize: expected true or false")
@@ -100,6 +103,11 @@ class JointLimitTask(Task):
     def equality_rows(self) -> bool:
         """False in mode ``'margin'`` (an inequality), True otherwise."""
         return self.mode != "margin"
+
+    def check_period(self, dt: float) -> None:
+        """In mode ``"margin"``, refuse ``gain * dt > 1`` (see :func:`.check_barrier_gain`)."""
+        if self.mode == "margin":
+            check_barrier_gain(self.gain, dt, f"{self.name}.gain", "margin rows")
 
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")

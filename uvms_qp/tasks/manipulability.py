@@ -11,7 +11,7 @@ from .._validation import FloatArray, as_scalar
 from ..analytic.manipulability import shaping_function
 from ..errors import InputError
 from ._common import TWIST_AXES, check_choice, check_frame, parse_axes
-from .task import Task
+from .task import Task, check_barrier_gain
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
@@ -233,6 +233,8 @@ class ManipulabilityTask(Task):
         threshold: ``rho_bar`` of the shaping function (mode ``"shaping"``).
         weight: Weight within the level.
         name: Task name (default ``"manipulability"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "manipulability"
@@ -250,8 +252,9 @@ class ManipulabilityTask(Task):
         threshold: float | None = None,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight)
+        super().__init__(name=name, weight=weight, activation=activation)
         check_choice(mode, ("ascend", "floor", "shaping"), f"{self.name}.mode")
         if not isinstance(frame, str) or not frame:
             raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
@@ -285,6 +288,11 @@ class ManipulabilityTask(Task):
         """False in mode ``'floor'`` (an inequality), True otherwise."""
         return self.mode != "floor"
 
+    def check_period(self, dt: float) -> None:
+        """In mode ``"floor"``, refuse ``gain * dt > 1`` (see :func:`.check_barrier_gain`)."""
+        if self.mode == "floor":
+            check_barrier_gain(self.gain, dt, f"{self.name}.gain", "floor row")
+
     def _bind(self, model: Model) -> int:
         check_frame(model, self.frame, f"{self.name}.frame")
         if model.n_joints == 0:
@@ -305,7 +313,7 @@ class ManipulabilityTask(Task):
         self._memo_serial = -1
         return 1 if self.mode == "floor" else n
 
-    def reset(self) -> None:
+    def _reset(self) -> None:
         """Forget the previous value used for ``w_dot``."""
         self._prev = None
         self._w_dot = 0.0

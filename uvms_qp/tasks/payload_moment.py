@@ -10,7 +10,7 @@ import numpy as np
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
 from ._common import check_choice, check_frame
-from .task import Task
+from .task import Task, check_barrier_gain
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
@@ -43,6 +43,8 @@ class PayloadMomentTask(Task):
         normalize: Normalise the gradient (mode ``"reduce"``).
         weight: Weight within the level.
         name: Task name (default ``"payload_moment"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "payload_moment"
@@ -60,8 +62,9 @@ class PayloadMomentTask(Task):
         normalize: bool = False,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight)
+        super().__init__(name=name, weight=weight, activation=activation)
         check_choice(mode, ("reduce", "bound"), f"{self.name}.mode")
         if not isinstance(frame, str) or not frame:
             raise InputError(f"{self.name}.frame: expected a frame name, got {frame!r}")
@@ -84,6 +87,11 @@ class PayloadMomentTask(Task):
     def equality_rows(self) -> bool:
         """False in mode ``'bound'`` (an inequality), True otherwise."""
         return self.mode != "bound"
+
+    def check_period(self, dt: float) -> None:
+        """In mode ``"bound"``, refuse ``gain * dt > 1`` (see :func:`.check_barrier_gain`)."""
+        if self.mode == "bound":
+            check_barrier_gain(self.gain, dt, f"{self.name}.gain", "bound row")
 
     def _bind(self, model: Model) -> int:
         check_frame(model, self.frame, f"{self.name}.frame")

@@ -30,6 +30,8 @@ class PostureTask(ErrorTask):
         gain: Gain K [1/s], scalar or per joint.
         weight: Weight within the level.
         name: Task name (default ``"posture"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "posture"
@@ -45,8 +47,9 @@ class PostureTask(ErrorTask):
         gain: float | list[float] = 1.0,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain)
+        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
         self.reference = check_choice(reference, ("activation", "middle"),
                                       f"{self.name}.reference")
         self.joints = check_joint_list(joints, f"{self.name}.joints")
@@ -80,7 +83,7 @@ class PostureTask(ErrorTask):
         """Set ``q_ref`` (a copy), or None."""
         self._q_ref = None if value is None else value.copy()
 
-    def reset(self) -> None:
+    def _reset(self) -> None:
         """Forget the activation posture."""
         self._set_reference(self._posture_arg)
 

@@ -36,7 +36,10 @@ class StationKeepingTask(ErrorTask):
 
     Args:
         axes: Coordinates to hold, from ``x, y, z, phi, theta, psi`` (planar ``x, y, psi``);
-            default ``x, y, z, psi`` (planar ``x, y, psi``). Roll/pitch only if actuated.
+            default: the whole pose the vehicle controls, ``x, y, z, psi`` plus ``phi`` and
+            ``theta`` when roll and pitch are actuated (planar ``x, y, psi``): an actuated
+            attitude left free is one a lower-priority wish may tilt. Roll/pitch only if
+            actuated.
         target: Set point for the selected coordinates [m, rad], or None (see ``hold``).
         pose: Alternatively the set point as a vehicle pose in the world frame
             (``pinocchio.SE3``, 4x4 homogeneous matrix or ``{"xyz", "rpy"}``); its selected
@@ -48,6 +51,8 @@ class StationKeepingTask(ErrorTask):
         gain: Gain K [1/s], scalar or per coordinate.
         weight: Weight within the level.
         name: Task name (default ``"station_keeping"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "station_keeping"
@@ -65,8 +70,9 @@ class StationKeepingTask(ErrorTask):
         gain: float | list[float] = 1.0,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain)
+        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
         self._axes_arg = None if axes is None else parse_axes(axes, _ALL, f"{self.name}.axes")
         self.hold = check_choice(hold, ("activation", "current"), f"{self.name}.hold")
         if blend is not None and (not isinstance(blend, str) or not blend):
@@ -88,7 +94,9 @@ class StationKeepingTask(ErrorTask):
             raise InputError(f"{self.name}: model {model.name!r} has a fixed base; station keeping "
                              "needs a vehicle")
         if self._axes_arg is None:
-            axes = ["x", "y", "psi"] if model.vehicle_kind == "planar" else ["x", "y", "z", "psi"]
+            axes = (["x", "y", "psi"] if model.vehicle_kind == "planar" else
+                    ["x", "y", "z", *(a for a in ("phi", "theta")
+                                      if _ACTUATOR[a] in model.actuated), "psi"])
         else:
             axes = self._axes_arg
         for a in axes:
@@ -135,7 +143,7 @@ class StationKeepingTask(ErrorTask):
                              "in mode 'shaping'")
         self._blend_task = other
 
-    def reset(self) -> None:
+    def _reset(self) -> None:
         """Forget the activation pose (a new one is taken at the next evaluation)."""
         self._set_point(self._target_arg)
 

@@ -22,6 +22,19 @@ rows allow; a ``J`` that does not change is returned as the same read-only array
 written into a given buffer once), :meth:`Task.rows` returns fresh :class:`~uvms_qp.rows.Rows`,
 and ``compute_error`` / ``compute_jacobian`` / ``compute_feedforward`` are views of
 :meth:`ErrorTask.error_rows`.
+
+Two run-time properties are common to every task:
+
+* the activation ``a`` in [0, 1] (:attr:`Task.activation`): 1 is a task in the stack, 0 a task
+  out of it (its rows are left free), and in between the controller blends the commands with
+  and without the task, ``a zeta_with + (1 - a) zeta_without``, so inserting or removing a task
+  does not step the command (the scalar case of the continuous activation of Mansard, Khatib
+  and Kheddar, IEEE Trans. Robotics 2009). ``update(activation=...)`` ramps it to the new value
+  over :attr:`Task.ramp` seconds with a smoothstep ``3 s^2 - 2 s^3`` (zero slope at both ends);
+* the period check (:meth:`Task.check_period`): a task whose rows drive a quantity with a gain
+  ``K`` [1/s] moves it, while the rows hold, as ``d_{k+1} = (1 - K dt) d_k``; it settles without
+  overshoot only for ``K dt <= 1``. Set-based rows (a floor, a margin, a bound) that overshoot
+  switch on and off every tick, so the controller refuses them at bind time, where dt is known.
 """
 
 from __future__ import annotations
@@ -48,6 +61,37 @@ def check_task_name(name: Any, default: str) -> str:
         raise InputError(
             f"name: expected a non-empty string without surrounding spaces, got {name!r}")
     return name
+
+
+#: Default duration of an activation ramp [s] (:attr:`Task.ramp`).
+DEFAULT_RAMP = 1.0
+
+
+def as_activation(value: Any, name: str) -> float:
+    """Validate an activation: a number in [0, 1]."""
+    a = as_scalar(value, name, nonnegative=True)
+    if a > 1.0:
+        raise InputError(f"{name}: expected an activation in [0, 1], got {a:g}")
+    return a
+
+
+def check_barrier_gain(gain: float, dt: float, name: str, row: str) -> None:
+    """Refuse a set-based row whose gain overshoots at period ``dt``: ``gain * dt > 1``.
+
+    The row ``h_dot >= gain (h_min - h)`` (or its mirror) holds the distance to the bound
+    ``d = h - h_min`` at ``d_{k+1} = (1 - gain dt) d_k`` while it binds: monotone for
+    ``gain dt <= 1``, alternating around the bound (the row switching on and off every tick)
+    above, divergent from 2.
+
+    Raises:
+        InputError: ``gain * dt > 1`` (the message gives the largest gain for this period).
+    """
+    if gain * dt > 1.0 + 1e-12:
+        raise InputError(
+            f"{name}: gain * dt = {gain:g} * {dt:g} = {gain * dt:.4g} > 1: the {row} would "
+            f"overshoot its bound and switch on and off every tick (the distance to the bound "
+            f"evolves as d_(k+1) = (1 - gain dt) d_k while the row binds); use gain <= "
+            f"{1.0 / dt:.6g} [1/s] = 1 / dt")
 
 
 def as_gain(value: Any, name: str = "gain") -> float | FloatArray:
@@ -82,13 +126,18 @@ class Task(ABC):
             set it to a sequence of floats (e.g. ``(w,)``): it becomes an array when read.
         row_weights: Per-row weights (dim,), task weight included; a new array whenever they
             change (so a consumer re-reads them only then).
+        activation: The activation in [0, 1] at the last evaluation (see the module
+            docstring); ``update(activation=...)`` ramps it.
+        ramp: Duration of an activation ramp from 0 to 1 [s] (0: a step); a partial ramp takes
+            the same fraction of it.
     """
 
     type_name: ClassVar[str] = "task"
     error_unit: str = ""
     rate_unit: str = ""
 
-    def __init__(self, *, name: str | None = None, weight: float = 1.0) -> None:
+    def __init__(self, *, name: str | None = None, weight: float = 1.0,
+                 activation: float = 1.0) -> None:
         self.name = check_task_name(name, self.type_name)
         self.weight = as_scalar(weight, f"{self.name}.weight", positive=True)
         self.model: Model | None = None
@@ -96,6 +145,11 @@ class Task(ABC):
         self.row_weights: FloatArray = np.zeros(0)
         self._error: Any = None  # last_error as set (a sequence becomes an array when read)
         self._written: tuple[Any, Any] = (None, None)  # (buffer, J) of the latest fill
+        self.activation = as_activation(activation, f"{self.name}.activation")
+        self.ramp = DEFAULT_RAMP
+        self._initial_activation = self.activation
+        # a ramp: (from, to, start time or None until the next evaluation starts it)
+        self._ramping: tuple[float, float, float | None] | None = None
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Keep the methods the base classes mark final (``fill``, ``rows``, ...) final.
@@ -186,8 +240,10 @@ class Task(ABC):
 
         ``sides`` holds the lower sides, then the upper ones. The buffers may hold stale values:
         every entry is written, except that ``A`` is not written again when it received this
-        very ``J`` array (read-only) at the previous fill.
+        very ``J`` array (read-only) at the previous fill. Advances an activation ramp to ``t``.
         """
+        if self._ramping is not None:
+            self.advance_activation(t)
         J, lo, hi = self.evaluate(state, t)
         if J is not self._written[1] or A is not self._written[0]:
             A[...] = J
@@ -219,8 +275,54 @@ class Task(ABC):
         return float("nan") if e is None else math.sqrt(e @ e)
 
     # ----------------------------------------------------------------------------------- run time
-    def reset(self) -> None:  # noqa: B027 - optional hook
-        """Forget run-time memory (activation pose, previous values); called by Controller.reset."""
+    def reset(self) -> None:
+        """Forget run-time memory (activation pose, previous values); called by Controller.reset.
+
+        The activation returns to its value at construction. Subclasses with memory of their
+        own extend :meth:`_reset`.
+        """
+        self.activation = self._initial_activation
+        self._ramping = None
+        self._reset()
+
+    def _reset(self) -> None:  # noqa: B027 - optional hook
+        """Forget the subclass's run-time memory."""
+
+    def check_period(self, dt: float) -> None:  # noqa: B027 - optional hook
+        """Check the task against the control period ``dt`` [s] (called by the controller).
+
+        Tasks with set-based rows refuse a gain with ``gain * dt > 1``
+        (:func:`check_barrier_gain`).
+
+        Raises:
+            InputError: the task's rows would not settle at this period.
+        """
+
+    def advance_activation(self, t: float) -> float:
+        """The activation at time ``t`` [s]: a pending ramp starts at the first call.
+
+        A ramp up from 0 first forgets the task's run-time memory (:meth:`_reset`): a task
+        entering the stack takes its activation pose then, not at the start of the run.
+
+        ``a(t) = a_0 + (a_1 - a_0) (3 s^2 - 2 s^3)``, ``s = (t - t_0) / (ramp |a_1 - a_0|)``
+        clipped to [0, 1]. Sets :attr:`activation`.
+        """
+        ramping = self._ramping
+        if ramping is None:
+            return self.activation
+        a0, a1, start = ramping
+        if start is None:
+            start = t
+            self._ramping = (a0, a1, t)
+            if a0 == 0.0:  # a task entering the stack starts afresh (its activation pose now)
+                self._reset()
+        span = self.ramp * abs(a1 - a0)
+        s = 1.0 if span <= 0.0 else min(max((t - start) / span, 0.0), 1.0)
+        self.activation = a0 + (a1 - a0) * s * s * (3.0 - 2.0 * s)
+        if s >= 1.0:
+            self.activation = a1
+            self._ramping = None
+        return self.activation
 
     def update(self, **params: Any) -> None:
         """Change parameters at run time (validated), e.g. ``payload.update(force=20.0)``.
@@ -241,10 +343,15 @@ class Task(ABC):
 
     def updatable(self) -> tuple[str, ...]:
         """Names of the parameters :meth:`update` accepts."""
-        return ("weight",)
+        return ("weight", "activation", "ramp")
 
     def _apply_update(self, key: str, value: Any) -> None:
-        if key == "weight":
+        if key == "activation":
+            target = as_activation(value, f"{self.name}.activation")
+            self._ramping = (self.activation, target, None)  # starts at the next evaluation
+        elif key == "ramp":
+            self.ramp = as_scalar(value, f"{self.name}.ramp", nonnegative=True)
+        elif key == "weight":
             self.weight = as_scalar(value, f"{self.name}.weight", positive=True)
             if self.model is not None:
                 self.row_weights = np.full(self.dim, self.weight)
@@ -273,8 +380,8 @@ class ErrorTask(Task):
     """
 
     def __init__(self, *, name: str | None = None, weight: float = 1.0,
-                 gain: float | list[float] = 1.0) -> None:
-        super().__init__(name=name, weight=weight)
+                 gain: float | list[float] = 1.0, activation: float = 1.0) -> None:
+        super().__init__(name=name, weight=weight, activation=activation)
         self.gain: float | FloatArray = as_gain(gain, f"{self.name}.gain")
         self._gains = np.zeros(0)  # one gain per row (set at bind)
 
@@ -303,6 +410,8 @@ class ErrorTask(Task):
     @final  # type: ignore[misc]  # the error tasks' one fill, final below ErrorTask
     def fill(self, state: State, t: float, A: FloatArray, sides: FloatArray) -> None:
         """Write ``J zeta = x_dot_d + K e`` (equality rows) into ``A`` and ``sides`` (2, dim)."""
+        if self._ramping is not None:
+            self.advance_activation(t)
         J, e, ff = self.error_rows(state, t)
         if J is not self._written[1] or A is not self._written[0]:
             A[...] = J

@@ -34,6 +34,8 @@ class VehicleAttitudeTask(ErrorTask):
         gain: Gain K [1/s], scalar or per axis.
         weight: Weight within the level.
         name: Task name (default ``"vehicle_attitude"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "vehicle_attitude"
@@ -49,8 +51,9 @@ class VehicleAttitudeTask(ErrorTask):
         gain: float | list[float] = 1.0,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain)
+        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
         self.axes = parse_axes(axes if axes is not None else ["phi", "theta"], ("phi", "theta"),
                                f"{self.name}.axes")
         self.roll = as_scalar(roll, f"{self.name}.roll")

@@ -52,6 +52,8 @@ class VehicleMotionTask(Task):
         include_arm: Also emit the arm joint-rate rows.
         weight: Weight within the level.
         name: Task name (default ``"vehicle_motion"``).
+        activation: Initial activation in [0, 1] (1: in the stack; see
+            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "vehicle_motion"
@@ -66,8 +68,9 @@ class VehicleMotionTask(Task):
         include_arm: bool = True,
         weight: float = 1.0,
         name: str | None = None,
+        activation: float = 1.0,
     ) -> None:
-        super().__init__(name=name, weight=weight)
+        super().__init__(name=name, weight=weight, activation=activation)
         if not isinstance(include_arm, bool):
             raise InputError(f"{self.name}.include_arm: expected true or false")
         self.beta = as_scalar(beta, f"{self.name}.beta")

@@ -142,9 +142,31 @@ class FaultyBackend:
         self.injector = injector
         self.spec = inner.spec
 
+    @property
+    def time_cap(self) -> float:
+        """The wrapped back-end's cap of one solve [s]."""
+        return float(self.inner.time_cap)
+
+    @time_cap.setter
+    def time_cap(self, value: float) -> None:
+        self.inner.time_cap = value
+
+    @property
+    def clock(self) -> Callable[[], float]:
+        """The wrapped back-end's clock."""
+        return self.inner.clock  # type: ignore[no-any-return]
+
+    @clock.setter
+    def clock(self, clock: Callable[[], float]) -> None:
+        self.inner.clock = clock
+
     def reset(self) -> None:
         """Cold-start the wrapped back-end (the schedule is kept)."""
         self.inner.reset()
+
+    def reduce(self, problem: Problem) -> bool:
+        """The wrapped back-end's reduction (faults touch answers only)."""
+        return bool(self.inner.reduce(problem))
 
     def solve(self, problem: Problem) -> Answer:
         """Solve through the wrapped back-end, or fail as scheduled."""

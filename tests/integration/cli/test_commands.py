@@ -157,3 +157,36 @@ def test_argument_errors_are_one_line_and_exit_2(argv, fragment, capsys):
     err = capsys.readouterr().err
     assert info.value.code == 2
     assert err.startswith(fragment) and err.count("\n") == 1 and "usage:" not in err
+
+
+# ---- --out that cannot be used, a misspelt solver: one line, exit 2, before any simulation
+@pytest.mark.parametrize("command", ["run", "compare"])
+@pytest.mark.parametrize("where", ["file", "under_file"])
+def test_unusable_out_fails_before_simulating(command, where, tmp_path, capsys, no_simulation):
+    existing = tmp_path / "afile"
+    existing.write_text("keep me")
+    out = existing if where == "file" else existing / "sub"
+    code = main([command, "paper000_quintic", "--out", str(out), "--quiet", "--no-plots"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith(f"uvms-qp {command}: error: --out: ")
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert existing.read_text() == "keep me"
+
+
+def test_failed_compare_leaves_no_empty_output_directory(tmp_path, capsys):
+    out = tmp_path / "new" / "cmp"
+    code = main(["compare", "paper000_quintic", "--out", str(out), "--schemes", "nope",
+                 "--quiet"])
+    assert code == 2 and "not compared by scenario" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_cli_solver_typo_names_the_option(tmp_path, capsys, no_simulation):
+    out = tmp_path / "out"
+    code = main(["run", "paper000_quintic", "--out", str(out), "--quiet", "--solver", "foo"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("uvms-qp run: error: --solver: unknown solver 'foo'")
+    assert err.count("known solvers:") == 1
+    assert not out.exists()

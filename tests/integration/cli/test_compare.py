@@ -1,8 +1,10 @@
 """``uvms-qp compare``: one results.json per scheme, the table, figures, and clean errors."""
 
+import importlib.resources
 import json
 
 from uvms_qp.cli import main
+from uvms_qp.sim.comparison import BOUNDS_NOTE, Comparison, SchemeRun
 
 
 def test_compare_writes_results_table_and_figures(tmp_path):
@@ -33,3 +35,43 @@ def test_compare_rejects_a_scheme_the_scenario_does_not_name(tmp_path, capsys):
     assert code == 2
     assert "not compared by scenario" in capsys.readouterr().err
     assert not (tmp_path / "hqp").exists()
+
+
+# ---- closed-form schemes ignore the hard bounds: the comparison says so
+def _run(name, violation):
+    return SchemeRun(name, result=None, metrics={"bound_violation_max": violation})  # type: ignore[arg-type]
+
+
+def test_comparison_flags_runs_that_exceed_the_hard_bounds():
+    comparison = Comparison("s", "d", [_run("hqp", 1e-12), _run("wang_pseudoinverse", 2500.0)])
+    assert [comparison.exceeds_bounds(r) for r in comparison.runs] == [False, True]
+    notes = comparison.notes()
+    assert len(notes) == 1 and notes[0].startswith("wang_pseudoinverse: " + BOUNDS_NOTE)
+    assert "2500" in notes[0]
+    markdown = comparison.markdown()
+    assert "| bound_violation_max |  | 1e-12 | 2500 (exceeded) |" in markdown
+    assert BOUNDS_NOTE in markdown
+
+
+def test_compare_of_a_closed_form_scheme_reports_the_bound_violation(tmp_path, capsys):
+    text = (importlib.resources.files("uvms_qp.scenarios")
+            / "paper003_case2_pseudoinverse.toml").read_text()
+    # joint rates far below what the pseudoinverse commands, over one second
+    text = text.replace("duration = 43.0", "duration = 1.0").split("[[phases]]")[0]
+    text = text.replace("limits = [1.0, 1.0, 1.0, 1.0, 1.0]",
+                        "limits = [0.001, 0.001, 0.001, 0.001, 0.001]")
+    path = tmp_path / "tight.toml"
+    path.write_text(text)
+    out = tmp_path / "cmp"
+    assert main(["compare", str(path), "--out", str(out), "--no-plots"]) == 0
+    captured = capsys.readouterr()
+    wang = json.loads((out / "wang_pseudoinverse" / "results.json").read_text())
+    assert set(wang["series"]["status"]) == {"optimal"}  # the per-step status cannot show it
+    assert wang["metrics"]["bound_violation_max"] > 1e-3
+    hqp = json.loads((out / "hqp" / "results.json").read_text())
+    assert hqp["metrics"]["bound_violation_max"] <= 1e-9
+    assert "(exceeded)" in captured.out
+    assert f"warning: wang_pseudoinverse: {BOUNDS_NOTE}" in captured.err
+    table = json.loads((out / "comparison.json").read_text())
+    assert table["exceeds_hard_bounds"] == [False, True]
+    assert BOUNDS_NOTE in (out / "comparison.md").read_text()

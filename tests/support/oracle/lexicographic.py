@@ -170,8 +170,12 @@ class Oracle:
             return None
         return z[:n]
 
-    def judge(self, x, candidates=()):
-        """One :class:`LevelJudgement` per level of the answer ``x``."""
+    def judge(self, x, candidates=(), met=0.0):
+        """One :class:`LevelJudgement` per level of the answer ``x``.
+
+        A level whose residual is at most ``met * scale`` is not solved (it cannot be improved
+        by more than that): ``met = TOL`` skips the met levels, which can never be wrong.
+        """
         x = np.asarray(x, dtype=np.float64)
         out = []
         for k in range(len(self.sizes)):
@@ -179,7 +183,7 @@ class Oracle:
             rho = self.residual(k, x)
             scale = _level_scale(self.lo[sl], self.hi[sl])
             best, witness = rho, None
-            if rho > 0.0:
+            if rho > met * scale:
                 for cand in (self.level_qp(k, x), *candidates):
                     val, c = self.verified(k, x, cand)
                     if val < best:

@@ -5,6 +5,7 @@ from hypothesis import strategies as st
 
 from uvms_qp.analytic import (
     closed_loop_reference,
+    davies_solve,
     gradient_projection,
     multi_objective_gradient_projection,
     normalized_gradient,
@@ -160,3 +161,15 @@ def test_task_priority_validation():
         multi_objective_gradient_projection(np.ones((1, 2)), [1.0], [np.ones(2)], [1.0, 2.0], 1.0)
     with pytest.raises(ShapeError, match="gradient"):
         gradient_projection(np.ones((1, 2)), [1.0], np.ones(3), 1.0)
+
+
+def test_bad_sequences_name_the_item() -> None:
+    with pytest.raises(InputError, match="tasks"):
+        recursive_task_priority(None)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"tasks\[0\]"):
+        recursive_task_priority([None])  # type: ignore[list-item]
+    N = np.array([[1.0, 2.0]])
+    with pytest.raises(InputError, match=r"primary\[0\]"):
+        davies_solve(N, ["a"], [1.0])  # type: ignore[list-item]
+    # Psi_1 = -N_1^{-1} N_0 Psi_0 = -(1 / 2) * 1
+    np.testing.assert_allclose(davies_solve(N, [0], [1.0]), [1.0, -0.5])

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from uvms_qp import UvmsQpError
 from uvms_qp.constraints import (
     CONSTRAINT_TYPES,
     Constraint,
@@ -14,7 +17,7 @@ from uvms_qp.constraints import (
     VehicleRateBounds,
 )
 from uvms_qp.controller import Controller
-from uvms_qp.errors import BoundsError, InputError, UnknownNameError
+from uvms_qp.errors import BoundsError, InputError, NonFiniteError, UnknownNameError
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import PostureTask
@@ -32,7 +35,8 @@ def _with_joints(model, joints):
 
 def test_registry():
     assert set(CONSTRAINT_TYPES) == {"joint_position_bounds", "joint_velocity_bounds",
-                                     "vehicle_rate_bounds", "linear_inequality"}
+                                     "vehicle_rate_bounds", "command_rate_bounds",
+                                     "linear_inequality"}
 
 
 def test_joint_position_bounds_one_euler_step_stays_inside(rov):
@@ -179,3 +183,33 @@ def test_linear_inequality_takes_real_numbers_only(kwargs, match):
     row = kwargs.pop("A_row", [1.0] * 10)
     with pytest.raises(InputError, match=match):
         LinearInequality(A=[row], **kwargs)
+
+
+# ------------------------------------------------------------------------ constraint arguments
+# (id, callable taking the model, error type, fragment of the message naming the culprit)
+BAD_CONSTRAINTS = [
+    ("rate limit NaN", lambda m: JointVelocityBounds(limits=[math.nan, 1.0, 1.0, 1.0]),
+     NonFiniteError, "limits"),
+    ("rate limit negative", lambda m: VehicleRateBounds(angular=-0.1), InputError, "angular"),
+    ("rate limit NaN (vehicle)", lambda m: VehicleRateBounds(linear=math.nan), NonFiniteError,
+     "linear"),
+    ("position-bound gain NaN", lambda m: JointPositionBounds(gain=math.nan), NonFiniteError,
+     "gain"),
+    ("hard row lower > upper", lambda m: LinearInequality(A=[[1.0]], lower=[1.0], upper=[0.5],
+                                                          columns=["u"]), BoundsError,
+     "lower > upper"),
+    ("hard row NaN", lambda m: LinearInequality(A=[[math.nan]], upper=[0.5], columns=["u"]),
+     NonFiniteError, "A"),
+    ("constraint not a constraint", lambda m: Stack(levels=[Level(PostureTask())],
+                                                    constraints=["joint_velocity_bounds"]),
+     InputError, "constraints[0]"),
+]
+
+
+@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_CONSTRAINTS],
+                         ids=[c[0] for c in BAD_CONSTRAINTS])
+def test_bad_constraint_argument_is_raised_with_its_culprit(rov, build, error, fragment):
+    with pytest.raises(error) as info:
+        build(rov)
+    assert isinstance(info.value, UvmsQpError)
+    assert fragment in str(info.value)

@@ -31,7 +31,8 @@ def _equality_stack(model, rng):
     target = state.position("tool") + rng.normal(scale=0.1, size=3)
     return state, Stack(levels=[
         Level(EndEffectorTask(position=target, gain=1.5)),
-        Level(StationKeepingTask(target=list(rng.normal(scale=0.2, size=4)), gain=1.0)),
+        Level(StationKeepingTask(axes=["x", "y", "z", "psi"],
+                                 target=list(rng.normal(scale=0.2, size=4)), gain=1.0)),
         Level(PostureTask(posture=list(model.split(q)[1] + 0.1), gain=0.5)),
     ])
 

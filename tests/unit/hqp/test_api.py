@@ -1,18 +1,19 @@
-"""Public surface of the lexicographic solver: results, statuses, semantics and bad input."""
+"""Public surface of the lexicographic solver: results, statuses and semantics.
+
+Its bad input is tested in ``test_validation.py``.
+"""
+
+import time
 
 import numpy as np
 import pytest
 
 from uvms_qp import (
-    BoundsError,
     InputError,
-    NonFiniteError,
-    ShapeError,
-    UnknownSolverError,
     solve_hierarchy,
 )
 from uvms_qp.hqp import HierarchySolver, Rows, Status, available_solvers, normalize_problem
-from uvms_qp.hqp.registry import SOLVERS, SolverSpec, get_spec
+from uvms_qp.hqp.registry import SOLVERS
 
 QP = [s for s in available_solvers() if s != "nullspace"]
 EXACT = ["daqp", "cascade:quadprog"]
@@ -157,12 +158,6 @@ def test_cascade_weights_are_weighted_least_squares():
     assert result.level_residuals[0] == pytest.approx(np.sqrt(0.75**2 + 3 * 0.25**2), abs=1e-8)
 
 
-def test_nullspace_refuses_inequality_levels():
-    with pytest.raises(InputError, match=r"levels\[1\].*equality rows only"):
-        solve_hierarchy([[(np.eye(2), [1.0, 1.0])], [(np.eye(2), [0.0, 0.0], [1.0, 1.0])]],
-                        solver="nullspace")
-
-
 def test_nullspace_reports_violated_bound():
     result = solve_hierarchy([[(np.eye(2), [2.0, 0.0])]], lower=[-1, -1], upper=[1, 1],
                              solver="nullspace")
@@ -195,54 +190,6 @@ def test_no_levels_gives_minimum_norm_point_of_box():
     result = solve_hierarchy([], lower=[1.0, -2.0], upper=[3.0, -1.0], solver="cascade:quadprog")
     assert result.x == pytest.approx([1.0, -1.0])
     assert result.level_residuals == []
-
-
-# -- bad input -------------------------------------------------------------------------------
-@pytest.mark.parametrize(
-    ("levels", "kwargs", "error", "match"),
-    [
-        ([[(np.eye(2), [1.0])]], {}, ShapeError, r"levels\[0\]\[0\]\.b"),
-        ([[(np.eye(2), [1.0, 1.0])], [(np.eye(3), [1.0, 1.0, 1.0])]], {}, ShapeError,
-         r"levels\[1\]\[0\]\.A: expected 2 columns"),
-        ([[(np.array([[1.0, np.nan]]), [1.0])]], {}, NonFiniteError, "NaN"),
-        ([[(np.eye(2), [1.0, np.inf])]], {}, NonFiniteError, "inf"),
-        ([[(np.eye(2), [2.0, 0.0], [1.0, 1.0])]], {}, BoundsError, "lower > upper"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [1.0, 0.0], "upper": [0.0, 1.0]}, BoundsError,
-         "bounds"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [0.0]}, ShapeError, "lower"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, -1.0]}, InputError, "weights"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, np.nan]}, NonFiniteError, "weights"),
-        ([["not rows"]], {}, InputError, r"levels\[0\]\[0\]"),
-        ("nope", {}, InputError, "levels"),
-        ([[(np.array([[1.0, np.inf]]), [1.0])]], {}, NonFiniteError, r"levels\[0\]\[0\]\.A"),
-        ([[(np.eye(2), [1.0, -np.inf])]], {}, NonFiniteError, r"levels\[0\]\[0\]\.b"),
-        ([[(np.eye(2), [np.nan, 0.0], [1.0, 1.0])]], {}, NonFiniteError, "lower"),
-        ([[(np.eye(2), [np.inf, 0.0], [np.inf, 1.0])]], {}, InputError, "lower side is"),
-        ([[(np.eye(2), [0.0, 0.0], [-np.inf, 1.0])]], {}, InputError, r"levels\[0\]\[0\]"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [0.0, np.nan]}, NonFiniteError, "lower"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"lower": [np.inf, 0.0]}, InputError, "lower bound"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"upper": [-np.inf, 0.0]}, InputError, "upper bound"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 2)), [1.0], [0.0])]}, BoundsError,
-         "hard"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 3)), [1.0])]}, ShapeError, "hard"),
-        ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, 0.0]}, InputError, "weights"),
-        ([[Rows(np.eye(2), np.ones(2), np.ones(2), np.array([1.0, -1.0]), "t")]], {},
-         InputError, r"levels\[0\]\[0\] \(t\)\.weights"),
-    ],
-)
-@pytest.mark.parametrize("reuse", [False, True])
-def test_bad_input(levels, kwargs, error, match, reuse):
-    """Every bad input names its culprit, also on a solver whose buffers hold a good problem."""
-    if "weights" in kwargs:  # the metric is checked against the problem's size at solve time
-        with pytest.raises(error, match=match):
-            solve_hierarchy(levels, **kwargs)
-        return
-    solver = HierarchySolver("daqp")
-    if reuse:
-        assert solver.solve([[(np.eye(2), [0.5, 0.5])]], -np.ones(2), np.ones(2)).ok
-    with pytest.raises(error, match=match):
-        solver.solve(levels, **kwargs)
-    assert solver.solve([[(np.eye(2), [0.5, 0.5])]], -np.ones(2), np.ones(2)).ok
 
 
 def test_metric_changed_in_place_is_noticed():
@@ -296,29 +243,6 @@ def test_results_stay_valid_after_later_solves():
         assert np.array_equal(result.box, np.stack(box))
 
 
-def test_unknown_solver_lists_installed():
-    with pytest.raises(UnknownSolverError) as info:
-        solve_hierarchy([[(np.eye(2), [1.0, 1.0])]], solver="gurobi")
-    assert "daqp" in str(info.value) and "nullspace" in str(info.value)
-    assert isinstance(info.value, LookupError)
-
-
-def test_unknown_cascade_names_the_choices():
-    with pytest.raises(UnknownSolverError, match="cascades exist for the qpsolvers back-ends"):
-        HierarchySolver("cascade:cplex")
-
-
-def test_uninstalled_solver_says_what_to_install(monkeypatch):
-    import uvms_qp.hqp.registry as registry
-
-    ghost = SolverSpec(name="cascade:ghost", kind="cascade", modules=("no_such_module_x",),
-                       pip="qpsolvers ghostqp")
-    monkeypatch.setattr(registry, "_BY_NAME", {**registry._BY_NAME, "cascade:ghost": ghost})
-    with pytest.raises(UnknownSolverError, match=r"pip install qpsolvers ghostqp") as info:
-        get_spec("cascade:ghost")
-    assert "daqp" in str(info.value)
-
-
 def test_cli_solvers_lists_installed(capsys):
     from uvms_qp.cli import main
 
@@ -326,3 +250,39 @@ def test_cli_solvers_lists_installed(capsys):
     out = capsys.readouterr().out
     for name in available_solvers():
         assert name in out
+
+
+@pytest.mark.skipif("cascade:proxqp" not in available_solvers(), reason="proxsuite missing")
+def test_proxqp_is_bounded_on_a_badly_scaled_level():
+    # BlueROV2 tool rows at home, target 1e6 m away with gain 10 (used to run for a minute)
+    A = np.array([
+        [1, 0, 0, 0, -0.058358470175360361, -0.099000330993482585, 3.3099348258069927e-07,
+         0.017641529824639651, 0.054895711407959361, 0],
+        [0, 1, 0, 0.058358470175360361, 0, 0.51461142773189239, -0.27461142773189240, 0,
+         -1.3171897158927282e-07, 0],
+        [0, 0, 1, 0.099000330993482585, -0.51461142773189239, 0, 0, -0.25461142773189238,
+         0.12251131935048581, 0]])
+    b = np.array([9.999994853885721e+06, -0.9900033099348259, 0.5835847017536036])
+    lo = np.array([-1.5] + [-np.inf] * 5 + [-0.5] * 4)
+    t0 = time.perf_counter()
+    r = solve_hierarchy([[(A, b)]], lo, -lo, solver="cascade:proxqp")
+    elapsed = time.perf_counter() - t0
+    assert elapsed < 10.0  # was about 60 s; well under 1 s on an idle machine
+    assert np.all(np.isfinite(r.x))
+    if r.status == Status.OPTIMAL:  # an answer is only reported optimal when it is one
+        assert np.max(np.abs(A @ r.x - b)) <= 1e-6 * np.max(np.abs(b))
+    else:
+        assert r.status == Status.BACKEND_ERROR
+
+
+@pytest.mark.skipif("cascade:highs" not in available_solvers(), reason="highspy missing")
+def test_an_answer_of_the_wrong_length_from_a_back_end_is_a_failed_qp():
+    """HiGHS answers a level with rows of 1e10 with an empty x; that used to escape as a raw
+    ValueError from the certificate's feasibility test instead of a failed QP."""
+    levels = [[(np.array([[1e10, 1.0, 0.0]]), [1.0])], [(np.eye(3), [1.0, 2.0, 3.0])]]
+    result = solve_hierarchy(levels, -np.ones(3), np.ones(3), solver="cascade:highs")
+    assert np.all(np.isfinite(result.x)) and np.all(np.abs(result.x) <= 1.0)
+    # (unproven: rows of 1e10 beside rows of 1, which the certificate may not prove at 1e-6)
+    assert result.status in (Status.LEVEL_INFEASIBLE, Status.BACKEND_ERROR, Status.UNPROVEN)
+    if result.status == Status.LEVEL_INFEASIBLE:  # then the first level is met: x0 = 1e-10 (1 - x1)
+        assert abs(1e10 * result.x[0] + result.x[1] - 1.0) <= 1e-6

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from tests.regressions.corpus import load_problem
-from tests.unit.hqp.test_lexicographic import random_mixed_inputs
+from tests.unit.hqp.test_lexicographic import ill_posed, random_mixed_inputs
 from uvms_qp.hqp import HierarchySolver, Problem, Rows, normalize_problem
 from uvms_qp.hqp.backends.daqp import _Setup
 from uvms_qp.hqp.backends.daqp_binding import (
@@ -171,17 +171,21 @@ def _rescaled(rng, levels):
 def test_daqp_equals_the_weighted_optimum_on_scaled_weighted_levels():
     rng = np.random.default_rng(11)
     daqp_solver, cascade = HierarchySolver("daqp"), HierarchySolver("cascade:quadprog")
-    unmet = 0
+    unmet = sensitive = 0
     for i in range(300):
         levels, lower, upper, hard = random_mixed_inputs(rng)
         problem = normalize_problem(_rescaled(rng, levels), lower, upper, None, hard)
         got, ref = daqp_solver.solve_problem(problem), cascade.solve_problem(problem)
-        assert got.ok and ref.ok, i
+        if ill_posed(got) and ill_posed(ref):
+            sensitive += 1  # both say the priorities do not fix the level to 1e-6: not "ok"
+        else:
+            assert got.ok and ref.ok, i
         unmet += ref.infeasible_level is not None
         for k, (r, q) in enumerate(zip(got.level_residuals, ref.level_residuals, strict=True)):
             assert abs(r - q) <= 1e-6 * max(1.0, q), (i, k, r, q)
         assert got.hard_violation <= 1e-9
     assert unmet >= 150  # most problems have a level that cannot be met: weights matter
+    assert sensitive <= 5  # weights 10^(+-2), rows 10^(+-1): a few levels 1e-9-sensitive
 
 
 def test_soft_weights_formula():
@@ -234,15 +238,20 @@ class _ModelWithoutSoftWeights(ModelDaqp):
 
 
 def test_a_daqp_without_soft_weights_still_solves():
-    """An older daqp binding (no per-row weights): the row-normalised compromise, no error."""
+    """An older daqp binding (no per-row weights) gives the row-normalised compromise; the
+    certificate does not take it for the weighted optimum, which the repair then reaches."""
     solver = HierarchySolver("daqp")
     solver.backend.open_binding = _ModelWithoutSoftWeights
     A = np.array([[1.0, 0.0], [10.0, 0.0]])
     b = np.array([0.0, 10.0])
     for _ in range(2):  # set-up, then a warm refresh
+        solver.certify, solver.repair = None, False
         result = solver.solve([[Rows.equality(A, b, weights=[1.0, 7.0])]])
-        assert result.ok
         assert result.x[0] == pytest.approx(0.5, abs=1e-6)  # weights 1/|a_i|^2: DAQP's own
+        solver.certify, solver.repair = solver.certifier, True
+        result = solver.solve([[Rows.equality(A, b, weights=[1.0, 7.0])]])
+        assert result.ok and result.info["repaired_from_level"] == 0
+        assert result.x[0] == pytest.approx(700.0 / 701.0, abs=1e-9)  # the weighted optimum
 
 
 # ------------------------------------------------------------------------------ the ladder

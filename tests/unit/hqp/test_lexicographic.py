@@ -106,12 +106,35 @@ def count_failures(name, sweep, count, indices=None):
         gap = max(abs(r - q) / max(1.0, q)
                   for r, q in zip(result.level_residuals, ref.level_residuals, strict=True))
         assert np.all(np.isfinite(result.x))
+        if ill_posed(result) and gap <= 1e-6 and result.hard_violation <= 1e-9:
+            continue  # the right answer, honestly not called optimal: a property of the problem
         if not result.ok:
             # a failure must be truthful: never a success status with a broken hard row
             failures.append((i, str(result.status), result.message))
         elif result.hard_violation > 1e-9 or gap > 1e-6:
             failures.append((i, "wrong", gap, result.hard_violation))
     return failures
+
+
+def ill_posed(result):
+    """An ``unproven`` answer whose first unproven level the certificate found ill-posed."""
+    cert = result.certificate
+    return result.status.value == "unproven" and cert is not None and cert.ill_posed
+
+
+def test_ill_posed_answers_are_a_property_of_the_problem(sweep):
+    """The few levels whose optimum a 1e-9 change of the levels above moves by more than the
+    tolerance are the same for the two references (a different algorithm each), rare, and the
+    answers still agree: only the claim of optimality is withheld."""
+    _, daqp_results, cascade_results = sweep
+    on_daqp = {i for i, r in enumerate(daqp_results) if ill_posed(r)}
+    on_cascade = {i for i, r in enumerate(cascade_results) if ill_posed(r)}
+    assert len(on_daqp | on_cascade) <= 0.005 * N_PROBLEMS
+    assert on_daqp & on_cascade  # the same problems (one is ill-posed on one side only)
+    for i in on_daqp | on_cascade:
+        got, ref = daqp_results[i], cascade_results[i]
+        assert max(abs(r - q) / max(1.0, q) for r, q in zip(
+            got.level_residuals, ref.level_residuals, strict=True)) <= 1e-6
 
 
 def test_problems_exercise_bounds_and_infeasible_levels(sweep):

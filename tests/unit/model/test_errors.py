@@ -15,6 +15,7 @@ from uvms_qp import (
     UnknownFrameError,
     UnknownModelError,
     UnknownNameError,
+    UvmsQpError,
     load_model,
 )
 from uvms_qp.model import DHRow, Vehicle
@@ -314,3 +315,72 @@ def test_a_configuration_must_be_real_numbers(rov, value, what):
     """Strings, booleans and complex numbers are refused, not converted (imaginary part lost)."""
     with pytest.raises(InputError, match=f"q: expected real numbers, got .*{what}"):
         rov.state(value)
+
+
+# ------------------------------------------------------------------ other model inputs
+def test_model_bad_inputs(rov: Model) -> None:
+    q = rov.neutral()
+    with pytest.raises(UnknownFrameError):
+        rov.frame_pose(q, ["tool"])  # type: ignore[arg-type]
+    state = rov.state(q)
+    with pytest.raises(UnknownFrameError):
+        state.jacobian(["tool"])  # type: ignore[arg-type]
+    with pytest.raises(UnknownFrameError):
+        state.arm_jacobian(["tool"])  # type: ignore[arg-type]
+    for bad in (-1.0, float("nan"), "x"):
+        with pytest.raises(InputError, match="position"):
+            rov.random_configuration(0, position=bad)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="rng"):
+        rov.random_configuration("seed")  # type: ignore[arg-type]
+
+
+def test_from_dh_joint_names_must_be_strings() -> None:
+    row = {"a": 1.0, "alpha": 0.0, "d": 0.0, "theta": 0.0}
+    with pytest.raises(InputError, match=r"joint_names\[0\]"):
+        Model.from_dh([row], vehicle="planar", joint_names=[1])  # type: ignore[list-item]
+    with pytest.raises(InputError, match="joint_names"):
+        Model.from_dh([row], vehicle="planar", joint_names="j1")
+
+
+def test_integrate_overflow_is_an_error(rov: Model) -> None:
+    q = rov.neutral()
+    with pytest.raises(NonFiniteError, match="overflow"):
+        rov.integrate(q, np.full(rov.nv, 1e154), 1.0)
+    # an ordinary step is unaffected
+    zeta = np.zeros(rov.nv)
+    zeta[0] = 0.5
+    q1 = rov.integrate(q, zeta, 2.0)
+    assert np.isfinite(q1).all()
+    assert rov.state(q1).position("vehicle")[0] == pytest.approx(1.0)
+
+
+def test_fixed_base_accepts_none_as_the_empty_pose():
+    model = load_model("nenchev_pa10_arm")
+    joints = model.split(model.home())[1]
+    np.testing.assert_array_equal(model.configuration(None, joints), model.home())
+    with pytest.raises(ShapeError, match="got length 1"):
+        model.configuration([0.0], joints)
+    spatial = load_model("wang_9dof")
+    with pytest.raises(ShapeError, match="length 6, got None"):
+        spatial.configuration(None, spatial.split(spatial.home())[1])
+
+
+# ------------------------------------------------------------------------------ configurations
+# (id, callable taking the model, error type, fragment of the message naming the culprit)
+BAD_MODEL = [
+    ("q wrong length", lambda m: m.state(np.zeros(m.nq - 1)), ShapeError, "q"),
+    ("q inf", lambda m: m.state(np.full(m.nq, math.inf)), NonFiniteError, "q"),
+    ("quaternion far from unit", lambda m: m.state(np.r_[np.zeros(3), 0, 0, 0, 3.0,
+                                                         np.zeros(4)]), InputError, "quaternion"),
+    ("eta wrong length", lambda m: m.configuration(np.zeros(5), np.zeros(4)), ShapeError,
+     "eta"),
+]
+
+
+@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_MODEL],
+                         ids=[c[0] for c in BAD_MODEL])
+def test_bad_configuration_is_raised_with_its_culprit(rov, build, error, fragment):
+    with pytest.raises(error) as info:
+        build(rov)
+    assert isinstance(info.value, UvmsQpError)
+    assert fragment in str(info.value)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from uvms_qp.errors import InputError, NoSolutionFound, UnknownSolverError
-from uvms_qp.hqp import Status, hard_violation, normalize_problem
+from uvms_qp.hqp import HierarchySolver, Status, hard_violation, normalize_problem
 from uvms_qp.hqp.measure import clip_to_box
 from uvms_qp.safety import (
     DEGRADED_STAGES,
@@ -24,7 +24,8 @@ from uvms_qp.safety import (
 from uvms_qp.testing.faults import Fault, inject
 
 BOX = 0.3
-#: faults a measurement tells from an answer (a feasible wrong x needs a certificate)
+#: faults a measurement tells from an answer (the feasible wrong x, which only the certificate
+#: tells, has its own test)
 DETECTABLE = [f for f in Fault if f not in (Fault.SLEEP, Fault.FEASIBLE_WRONG)]
 
 
@@ -104,24 +105,26 @@ def test_faults_below_the_daqp_back_end_give_a_verified_command(fault):
     assert again.stage == "primary" and np.allclose(again.x, reference.x, atol=1e-9)
 
 
-def test_a_certificate_plugs_into_the_measurement_and_the_ladder():
-    """A feasible but wrong x is believed unless a certificate is asked; with the library's
-    certificate the wrong answer is 'unproven' and the ladder takes the next stage."""
-    from uvms_qp.hqp.certificate import certify, problem_arrays
-
+def test_a_feasible_but_wrong_answer_is_caught_by_the_default_certificate():
+    """A feasible but wrong x (DAQP faulted to return zero clipped into the box) is not believed:
+    the certificate, asked by default, does not prove it, and the answer is the true optimum
+    (repaired from the wrong one, and said so); believed only with the certificate off."""
     problem = _problem(2)
     truth = SafeSolver("cascade:quadprog").solve(problem).result.level_residuals
     safe = SafeSolver("daqp")
     injector = inject(safe, Fault.FEASIBLE_WRONG, count=1)
-    believed = safe.solve(problem)
-    assert injector.n_faults == 1 and believed.stage == "primary"  # nothing to tell it by
+    out = safe.solve(problem)
+    assert injector.n_faults == 1
+    assert out.result.ok and out.result.level_residuals == pytest.approx(truth, abs=1e-6)
+    assert "not proven optimal" in out.result.message and (
+        out.result.info.get("repaired_from_level") is not None or out.stage != "primary")
 
     safe = SafeSolver("daqp")
-    safe.primary.certify = lambda p, x: certify(*problem_arrays(p), x).first_failure
+    safe.primary.certify = None  # nothing else can tell a feasible wrong x from an optimum
     inject(safe, Fault.FEASIBLE_WRONG, count=1)
-    out = safe.solve(problem)
-    assert out.stage == "cold_retry" and "unproven" in out.attempts[0], out.attempts
-    assert out.result.ok and out.result.level_residuals == pytest.approx(truth, abs=1e-6)
+    believed = safe.solve(problem)
+    assert believed.stage == "primary" and believed.result.ok
+    assert believed.result.level_residuals != pytest.approx(truth, abs=1e-6)
 
 
 @pytest.mark.parametrize("fault, needle", [
@@ -275,6 +278,31 @@ def test_deadline_bounds_a_slow_cascade():
     assert any("deadline passed" in a for a in out.attempts)
     assert out.stage in DEGRADED_STAGES
     assert _safe(problem, out.x, 1e-9 * problem.hard_scale)
+
+
+def test_a_cascade_solve_stops_at_the_time_cap_on_the_safe_solvers_clock():
+    """No deadline; on a fake clock every read takes 20 ms. A cascade solve (several QPs) passes
+    the safe solver's 50 ms cap, starts no further QP, says so, and the ladder answers from the
+    alternate back-end; a plain solver has no cap unless given one."""
+    problem = _problem(8)
+    clock = FakeClock()
+    safe = SafeSolver("cascade:quadprog", clock=clock)
+    assert safe.time_cap == 0.05 and safe.primary.time_cap == 0.05
+    assert safe.solve(problem).stage == "primary"
+    clock.step = 0.02
+    out = safe.solve(problem)
+    assert any("stopped at the time cap of 50 ms" in a for a in out.attempts), out.attempts
+    assert out.stage == "alternate" and out.result.ok and not out.deadline_missed
+    assert _safe(problem, out.x, 1e-9 * problem.hard_scale)
+    # the cap is an option of the solver, on the solver's clock
+    solver = HierarchySolver("cascade:quadprog")
+    assert solver.time_cap == float("inf")
+    solver.clock = FakeClock(0.02)
+    assert solver.solve_problem(problem).ok
+    solver.time_cap = 0.05
+    capped = solver.solve_problem(problem)
+    assert capped.status is Status.BACKEND_ERROR and "time cap" in capped.message
+    assert capped.info["time_capped"] and np.all(np.isfinite(capped.x))
 
 
 def test_backend_limits():

@@ -12,10 +12,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
 from uvms_qp.controller import Controller
 from uvms_qp.errors import NoSolutionFound
+from uvms_qp.model import load_model
 from uvms_qp.safety import DEGRADED_STAGES
 from uvms_qp.sim.scenario import load_scenario
+from uvms_qp.stack import Level, Stack
+from uvms_qp.tasks import EndEffectorTask, StationKeepingTask
 from uvms_qp.testing.faults import Fault, inject
 
 K = 12
@@ -180,7 +184,6 @@ def test_every_scheme_runs_under_the_same_guard(scheme, solver, fault):
     """The weighted scheme, the closed form and a cascade: a faulted step gives a safe command
     and a truthful status from another stage, and the next step is the clean one."""
     from uvms_qp.bench.stacks import tool_posture_stack
-    from uvms_qp.model import load_model
     from uvms_qp.tasks import EndEffectorTask
 
     model = load_model("bluerov2_heavy_alpha5")
@@ -211,7 +214,6 @@ def test_every_scheme_runs_under_the_same_guard(scheme, solver, fault):
 def test_a_slow_step_is_flagged_on_every_scheme(scheme):
     """A 120 ms solve (on a fake clock) against a 50 ms deadline is flagged, on every scheme."""
     from uvms_qp.bench.stacks import tool_posture_stack
-    from uvms_qp.model import load_model
     from uvms_qp.tasks import EndEffectorTask
 
     model = load_model("bluerov2_heavy_alpha5")
@@ -227,3 +229,22 @@ def test_a_slow_step_is_flagged_on_every_scheme(scheme):
     assert late.step_time == pytest.approx(0.12)
     again = ctrl.step(state, 0.05)
     assert not again.deadline_missed
+
+
+@pytest.mark.parametrize("fault", [Fault.NAN_SUCCESS, Fault.WILD_FAILURE, Fault.MEMORY])
+def test_nullspace_never_returns_a_non_finite_zeta(rov, fault):
+    model = rov
+    stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds(), VehicleRateBounds()],
+                  levels=[Level(EndEffectorTask(position=[1.0, 0.0, 0.0])),
+                          Level(StationKeepingTask())])
+    c = Controller(model, stack, scheme="nullspace")
+    state = model.state(model.home())
+    clean = c.step(state)
+    inject(c, fault, count=2)  # the closed form and its cold retry
+    r = c.step(state)
+    assert np.all(np.isfinite(r.zeta))
+    assert np.all(r.zeta >= r.lower) and np.all(r.zeta <= r.upper)
+    assert r.stage == "alternate" and r.ok  # the QP alternate solves the same levels
+    again = c.step(state)
+    assert again.stage == "primary"
+    np.testing.assert_allclose(again.zeta, clean.zeta, atol=1e-12)

@@ -37,7 +37,7 @@ def test_joint_outside_its_limit_recovers_monotonically(rov, offset, solver):
     lower = float(rov.joint_lower[1])
     joints = np.array([3.0, lower - offset, 1.7, 3.0])
     q = rov.configuration(np.zeros(6), joints)
-    stack = Stack(levels=[Level(JointLimitTask(mode="margin", margin=0.05, gain=50.0)),
+    stack = Stack(levels=[Level(JointLimitTask(mode="margin", margin=0.05, gain=1.0 / DT)),
                           Level(EndEffectorTask(position=[0.2, 0.0, 0.8], gain=2.0))],
                   constraints=[JointPositionBounds(gain=0.5), JointVelocityBounds(),
                                VehicleRateBounds(linear=0.3, angular=0.3)])

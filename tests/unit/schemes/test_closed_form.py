@@ -6,7 +6,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from uvms_qp.analytic import end_point_field, self_motion_field
+from uvms_qp.controller import StepResult
 from uvms_qp.errors import ConfigError, InputError
+from uvms_qp.hqp import Status
 from uvms_qp.schemes import (
     SCHEME_TYPES,
     NenchevSingularityConsistent,
@@ -17,6 +19,7 @@ from uvms_qp.schemes import (
     WangPseudoinverse,
     build_scheme,
 )
+from uvms_qp.schemes.scheme import _make_result
 from uvms_qp.sim.scenario import load_scenario
 from uvms_qp.sim.trajectories import LineTrajectory
 
@@ -176,3 +179,25 @@ def test_registry_covers_the_paper_scenarios():
     for scenario_name in PAPER_SCENARIOS:
         listed.update(load_scenario(scenario_name).schemes)
     assert set(SCHEME_TYPES) <= listed
+
+
+# ----------------------------------------------------------- results of closed-form steps
+def test_closed_form_results_use_the_one_constructor():
+    zeta = np.array([0.1, -0.2, 0.3])
+    residuals = {"tool": (0.01, "m"), "posture": (0.2, "rad")}
+    a = _make_result("sr_tp", zeta, residuals, 1e-4, 2.5)
+    assert isinstance(a, StepResult) and a.hierarchy is None
+    assert (a.status, a.t, a.step_time, a.scheme, a.solver, a.stage) == (
+        Status.OPTIMAL, 2.5, 1e-4, "sr_tp", "closed-form", "primary")
+    assert a.level_names == (("tool", "posture"),)
+    assert a.task_residuals == residuals and a.task_errors == residuals
+    assert a.level_violations == pytest.approx([np.hypot(0.01, 0.2)])
+    assert a.ok and a.bound_violation == 0.0
+    assert "sr_tp" in a.summary() and "level 0" in a.summary()
+
+
+def test_a_result_without_hierarchy_measures_its_box():
+    res = StepResult(np.array([0.5, 2.0]), Status.BACKEND_ERROR, None, 0.0, 0.0, "s", "x",
+                     np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
+    assert res.bound_violation == pytest.approx(1.0) and not res.ok
+    assert res.task_residuals == {} and res.level_violations == []

@@ -13,8 +13,10 @@ import json
 import numpy as np
 import pytest
 
+from uvms_qp.cli.run import _summary as run_summary
 from uvms_qp.safety import DEGRADED_STAGES, STAGES
 from uvms_qp.schemes import build_scheme
+from uvms_qp.sim.comparison import Comparison, SchemeRun
 from uvms_qp.sim.results import results_dict, write_results
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario
@@ -136,3 +138,17 @@ def test_a_scheme_without_a_ladder_counts_as_primary():
     assert result.stage == ["primary"] * result.steps
     assert result.deadline_missed == [False] * result.steps
     assert result.metrics()["clipped_max"] == 0.0
+
+
+def test_run_and_compare_tables_show_stage_and_status_counts():
+    """The counts were in results.json only: the run summary and the comparison say them too."""
+    metrics = {"bound_violation_max": 0.0,
+               "stage_counts": {"primary": 598, "alternate": 2},
+               "status_counts": {"optimal": 590, "level_infeasible": 10}}
+    summary = run_summary(metrics).splitlines()
+    assert "  stage_counts                 primary 598, alternate 2" in summary
+    assert "  status_counts                optimal 590, level_infeasible 10" in summary
+    comparison = Comparison("s", "d", [SchemeRun("hqp", result=None, metrics=metrics)])  # type: ignore[arg-type]
+    markdown = comparison.markdown()
+    assert "| stage_counts | steps | primary 598, alternate 2 |" in markdown
+    assert "| status_counts | steps | optimal 590, level_infeasible 10 |" in markdown

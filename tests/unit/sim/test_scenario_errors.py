@@ -18,8 +18,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.unit.tasks.test_validation import SPATIAL_MESSAGE
 from uvms_qp.cli import main
 from uvms_qp.errors import ConfigError
+from uvms_qp.schemes import build_scheme
+from uvms_qp.sim.config import Table
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
 from uvms_qp.tasks import TASK_TYPES
@@ -355,3 +358,117 @@ def test_a_file_larger_than_the_limit_is_rejected_before_parsing(tmp_path):
     path.write_text(BASE + "# " + "x" * (4 * 1024 * 1024) + "\n")
     with pytest.raises(ConfigError, match=r"big\.toml: larger than 4 MiB"):
         load_scenario(path)
+
+
+def test_scenario_source_and_encoding(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="scenario"):
+        load_scenario(None)  # type: ignore[arg-type]
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(b"name = '\xe9'\n")
+    with pytest.raises(ConfigError, match=r"latin1\.toml.*UTF-8"):
+        load_scenario(path)
+
+
+def test_scheme_for_the_wrong_model_kind_is_named_once():
+    scenario = load_scenario("bluerov2_demo")
+    with pytest.raises(ConfigError) as info:
+        build_scheme("soylu_dexterous", scenario, "schemes[1]")
+    message = str(info.value)
+    assert message.count("soylu_dexterous") == 1, message
+    assert message.startswith("schemes[1]: scheme 'soylu_dexterous': ")
+    assert "'planar'" in message and "'spatial'" in message
+
+
+# ------------------------------------------ unknown before missing keys, helpful messages
+def replaced(old: str, new: str) -> str:
+    assert old in BASE, old
+    return BASE.replace(old, new)
+
+
+@pytest.mark.parametrize(
+    ("start", "goal", "path"),
+    [
+        ("[0.4911, 0.0990]", "[0.45, 0.15, -0.14]", "trajectories.path.goal"),
+        ("[0.4911, 0.0990]", "[0.45, 0.15]", "levels[0].tasks[0].trajectory"),
+    ],
+)
+def test_scenario_with_a_two_coordinate_trajectory_is_rejected(start, goal, path):
+    text = replaced("start = [0.49, 0.10, -0.17]\ngoal = [0.45, 0.15, -0.14]",
+                    f"start = {start}\ngoal = {goal}")
+    with pytest.raises(ConfigError) as info:
+        load_text(text)
+    assert info.value.path == path, str(info.value)
+    assert str(info.value).startswith(path + ": ")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "path", "fragment"),
+    [
+        ("duration = 1.0\n\n[initial]", "durration = 1.0\n\n[initial]", "durration",
+         "unknown key 'durration' (did you mean 'duration'?); known keys: constraints,"),
+        ("duration = 1.0\n\n[initial]", "length = 1.0\n\n[initial]", "length",
+         "unknown key 'length'; known keys:"),
+        ('model = "bluerov2_heavy_alpha5"', 'modle = "bluerov2_heavy_alpha5"', "modle",
+         "unknown key 'modle' (did you mean 'model'?)"),
+        ("time = 0.5", "tiem = 0.5", "events[0].tiem",
+         "unknown key 'tiem' (did you mean 'time'?); known keys: task, time, update"),
+        ("direction = 0.2", "directon = 0.2", "current.directon",
+         "unknown key 'directon' (did you mean 'direction'?)"),
+        ('type = "end_effector"', 'tpye = "end_effector"', "levels[0].tasks[0].tpye",
+         "unknown key 'tpye' (did you mean 'type'?)"),
+        ("goal = [0.45, 0.15, -0.14]", "gaol = [0.45, 0.15, -0.14]", "trajectories.path.gaol",
+         "unknown key 'gaol' for trajectory type 'quintic'"),
+    ],
+)
+def test_a_misspelt_required_key_is_named_as_unknown(old, new, path, fragment):
+    with pytest.raises(ConfigError) as info:
+        load_text(replaced(old, new))
+    assert info.value.path == path, str(info.value)
+    assert fragment in str(info.value)
+
+
+def test_a_truly_missing_key_is_still_reported_as_missing():
+    with pytest.raises(ConfigError, match=r"^duration: missing required field 'duration'"):
+        load_text(replaced("duration = 1.0\n\n[initial]", "\n[initial]"))
+    # an unrelated unread key of an undeclared table is not mistaken for the missing one
+    table = Table({"colour": 1}, "thing")
+    with pytest.raises(ConfigError, match=r"^thing: missing required field 'size'"):
+        table.take_number("size", required=True)
+    declared = Table({"colour": 1}, "thing", keys=("size",))
+    with pytest.raises(ConfigError, match=r"^thing\.colour: unknown key 'colour'; known keys: s"):
+        declared.take_number("size", required=True)
+
+
+def test_heading_string_other_than_current_says_what_is_allowed():
+    with pytest.raises(ConfigError) as info:
+        load_text(replaced('heading = "current"', 'heading = "curent"'))
+    assert info.value.path == "levels[1].tasks[2].heading"
+    assert "expected a number [rad] or the string 'current'" in str(info.value)
+    assert "got 'curent'" in str(info.value)
+
+
+EVENT = '\n\n[[events]]\ntime = 0.5\ntask = "tool"\nupdate = {{ {} }}'
+
+
+@pytest.mark.parametrize(
+    ("update", "path"),
+    [
+        ("position = [0.5, 0.1]", "events[1].update.position"),
+        ("trajectory = { type = 'line', start = [0.5, 0.1], goal = [0.5, 0.2], duration = 1.0 }",
+         "events[1].update.trajectory"),
+    ],
+)
+def test_event_update_needing_the_model_carries_the_event_path(update, path):
+    text = replaced("update = { force = 10.0 }",
+                    "update = { force = 10.0 }" + EVENT.format(update))
+    with pytest.raises(ConfigError) as info:
+        load_text(text)
+    assert info.value.path == path, str(info.value)
+    assert str(info.value).startswith(f"{path}: {SPATIAL_MESSAGE}")
+
+
+def test_event_update_with_three_coordinates_loads():
+    text = replaced("update = { force = 10.0 }",
+                    "update = { force = 10.0 }" + EVENT.format("position = [0.5, 0.1, 0.2]"))
+    scenario = load_text(text)
+    assert scenario.events[1].update == {"position": [0.5, 0.1, 0.2]}

@@ -134,3 +134,29 @@ def test_registry_names():
 def test_bad_input_names_the_culprit(build, error, culprit):
     with pytest.raises(error, match=rf"^{culprit}\b"):
         build()
+
+
+# ------------------------------------------------------- mixed point sizes are refused
+@pytest.mark.parametrize("cls", [QuinticTrajectory, LineTrajectory])
+def test_segment_rejects_start_and_goal_of_different_lengths(cls):
+    with pytest.raises(InputError, match=r"^goal: got 3 coordinates but start has 2"):
+        cls(start=[1, 2], goal=[1, 2, 3], duration=1)
+    with pytest.raises(InputError, match=r"^goal: got 2 coordinates but start has 3"):
+        cls(start=[1, 2, 3], goal=[1, 2], duration=1)
+
+
+def test_waypoints_reject_points_of_different_lengths():
+    with pytest.raises(InputError, match=r"^points\[2\]: got 3 coordinates but points\[0\] has 2"):
+        WaypointTrajectory([[0, 0], [1, 1], [1, 1, 1]], [0, 1, 2])
+
+
+def test_same_length_points_keep_their_dimension():
+    assert QuinticTrajectory([1, 2], [1, 3], 1).dimension == 2
+    assert QuinticTrajectory([1, 2, 3], [1, 3, 3], 1).dimension == 3
+    assert WaypointTrajectory([[0, 0], [1, 1]], [0, 1]).dimension == 2
+    assert CircleTrajectory([0, 0], 1.0, 2.0).dimension == 2
+    assert CircleTrajectory([0, 0, -1], 1.0, 2.0).dimension == 3
+    assert FixedTarget([0, 0]).dimension == 2
+    # planar samples are still 3-vectors with z = 0, halfway along the segment at t = T/2
+    sample = QuinticTrajectory([1, 2], [1, 4], 2.0).sample(1.0)
+    np.testing.assert_allclose(sample.position, [1.0, 3.0, 0.0])

@@ -2,12 +2,29 @@
 
 from __future__ import annotations
 
+import math
+import re
+
 import numpy as np
 import pytest
 
+from uvms_qp import UvmsQpError
 from uvms_qp.analytic import LIMIT_CLEARANCE, joint_limit_gradient
-from uvms_qp.errors import InputError, ShapeError, UnknownFrameError, UnknownJointError
+from uvms_qp.errors import (
+    InputError,
+    NonFiniteError,
+    ShapeError,
+    UnknownFrameError,
+    UnknownJointError,
+)
 from uvms_qp.model import load_model
+from uvms_qp.sim.trajectories import (
+    CircleTrajectory,
+    FixedTarget,
+    LineTrajectory,
+    QuinticTrajectory,
+    WaypointTrajectory,
+)
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import (
     TASK_TYPES,
@@ -126,6 +143,12 @@ def test_update_validates_and_applies(rov):
         payload.update(mass=3.0)
 
 
+def test_station_keeping_holds_the_whole_actuated_pose_by_default(rov):
+    assert StationKeepingTask().bind(rov).axes == ["x", "y", "z", "phi", "theta", "psi"]
+    four = load_model("wang_9dof")  # roll and pitch passive
+    assert StationKeepingTask().bind(four).axes == ["x", "y", "z", "psi"]
+
+
 def test_station_keeping_holds_activation_pose(rov):
     rng = np.random.default_rng(0)
     task = StationKeepingTask(gain=2.0).bind(rov)
@@ -135,7 +158,7 @@ def test_station_keeping_holds_activation_pose(rov):
     q1 = rov.integrate(q0, np.r_[0.3, 0, 0, 0, 0, 0.2, 0, 0, 0, 0], 1.0)
     e = task.compute_error(rov.state(q1), 0.0)
     eta0, eta1 = rov.split(q0)[0], rov.split(q1)[0]
-    np.testing.assert_allclose(e, (eta0 - eta1)[[0, 1, 2, 5]], atol=1e-12)
+    np.testing.assert_allclose(e, eta0 - eta1, atol=1e-12)  # all six: roll and pitch actuated
     task.reset()
     np.testing.assert_allclose(task.compute_error(rov.state(q1), 0.0), 0.0)
     current = StationKeepingTask(hold="current").bind(rov)
@@ -323,3 +346,124 @@ def test_holding_takes_the_pose_of_the_first_evaluation(rov):
     np.testing.assert_allclose(task.compute_error(s1, 0.2), 0.0, atol=1e-12)
     task.update(position=[0.5, 0.0, 0.0])  # an explicit target ends holding
     assert task.hold is None
+
+
+# ------------------------------------------- trajectories and axes bound to a model
+SPATIAL_MESSAGE = "got 2 coordinates, but the model is spatial; give 3 (x, y, z)"
+
+
+SPATIAL = re.escape(SPATIAL_MESSAGE)
+
+
+@pytest.fixture(scope="module")
+def spatial(rov):
+    return rov
+
+
+@pytest.fixture(scope="module")
+def planar(models):
+    return models["soylu_planar"]
+
+
+@pytest.mark.parametrize(
+    "trajectory",
+    [
+        QuinticTrajectory([0.5, 0.1], [0.5, 0.2], 1.0),
+        LineTrajectory([0.5, 0.1], [0.5, 0.2], 1.0),
+        CircleTrajectory([0.5, 0.1], 0.1, 1.0),
+        WaypointTrajectory([[0.5, 0.1], [0.5, 0.2]], [0.0, 1.0]),
+        FixedTarget([0.5, 0.1]),
+    ],
+    ids=["quintic", "line", "circle", "waypoints", "fixed"],
+)
+def test_a_planar_trajectory_is_rejected_on_a_spatial_model(spatial, planar, trajectory):
+    task = EndEffectorTask(trajectory=trajectory, name="tool")
+    with pytest.raises(ShapeError, match=r"^tool\.trajectory: " + SPATIAL):
+        task.bind(spatial)
+    # tracking it after binding is rejected too, and the previous target is kept
+    bound = EndEffectorTask(position=[0.5, 0.1, 0.2], name="tool").bind(spatial)
+    with pytest.raises(ShapeError, match=SPATIAL):
+        bound.track(trajectory)
+    np.testing.assert_allclose(bound.target(0.0)[0], [0.5, 0.1, 0.2])
+    # a planar model accepts it
+    EndEffectorTask(trajectory=trajectory, name="tool").bind(planar)
+
+
+def test_same_message_as_a_two_coordinate_position(spatial):
+    with pytest.raises(ShapeError) as position_error:
+        EndEffectorTask(position=[0.5, 0.1], name="tool").bind(spatial)
+    with pytest.raises(ShapeError) as trajectory_error:
+        EndEffectorTask(trajectory=FixedTarget([0.5, 0.1]), name="tool").bind(spatial)
+    assert str(position_error.value).split(": ", 1)[1] == str(trajectory_error.value).split(
+        ": ", 1)[1]
+
+
+class _FlatTrajectory:
+    """A trajectory that does not follow the contract: 2-vector positions and no dimension."""
+
+    duration = 1.0
+
+    def sample(self, t):
+        class S:
+            position = np.array([0.5, 0.1])
+            velocity = np.zeros(2)
+            rotation = None
+            angular_velocity = None
+
+        return S()
+
+
+def test_a_duck_typed_trajectory_is_sampled_at_bind(spatial, planar):
+    with pytest.raises(ShapeError, match=SPATIAL):
+        EndEffectorTask(trajectory=_FlatTrajectory(), name="tool").bind(spatial)
+    with pytest.raises(ShapeError, match=r"sample\(t\)\.position has 2 coordinates; expected 3"):
+        EndEffectorTask(trajectory=_FlatTrajectory(), name="tool").bind(planar)
+
+
+@pytest.mark.parametrize(
+    ("mode", "axes", "needs"),
+    [
+        ("position", ["x", "rz"], "'rz' needs mode = \"orientation\" or \"pose\""),
+        ("orientation", ["rz", "x"], "'x' needs mode = \"position\" or \"pose\""),
+    ],
+)
+def test_axes_of_another_mode_name_the_mode_they_need(mode, axes, needs):
+    with pytest.raises(InputError) as info:
+        EndEffectorTask(mode=mode, axes=axes, name="tool")
+    assert str(info.value).startswith("tool.axes: ")
+    assert needs in str(info.value)
+    EndEffectorTask(mode="pose", axes=axes, name="tool")  # both kinds are pose axes
+
+
+def test_axes_typo_is_still_an_unknown_axis():
+    with pytest.raises(InputError, match=r"unknown axis 'q'; known axes: x, y, z"):
+        EndEffectorTask(axes=["x", "q"])
+
+
+# ------------------------------------------------------------------------------ task arguments
+# (id, callable taking the model, error type, fragment of the message naming the culprit)
+BAD_TASKS = [
+    ("target NaN", lambda m: EndEffectorTask(position=[0.0, math.nan, 0.0]), NonFiniteError,
+     "position"),
+    ("target wrong length", lambda m: EndEffectorTask(position=[0.0, 1.0, 2.0, 3.0]),
+     ShapeError, "position"),
+    ("gain negative", lambda m: EndEffectorTask(position=[0, 0, 0], gain=-1.0), InputError,
+     "gain"),
+    ("gain NaN", lambda m: PostureTask(gain=math.nan), NonFiniteError, "gain"),
+    ("gains list with a negative", lambda m: PostureTask(gain=[1.0, -1.0, 1.0, 1.0]),
+     InputError, "gain"),
+    ("weight zero", lambda m: PostureTask(weight=0.0), InputError, "weight"),
+    ("weight NaN", lambda m: PostureTask(weight=math.nan), NonFiniteError, "weight"),
+    ("weight negative", lambda m: StationKeepingTask(weight=-2.0), InputError, "weight"),
+    ("level not a task", lambda m: Level("posture"), InputError, "Task"),
+    ("axis unknown", lambda m: StationKeepingTask(axes=["x", "w"]).bind(m), InputError, "w"),
+]
+
+
+@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_TASKS],
+                         ids=[c[0] for c in BAD_TASKS])
+def test_bad_task_argument_is_raised_with_its_culprit(rov, build, error, fragment):
+    with pytest.raises(error) as info:
+        build(rov)
+    assert isinstance(info.value, UvmsQpError)
+    assert fragment in str(info.value)

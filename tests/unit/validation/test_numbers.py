@@ -12,11 +12,9 @@ import numpy as np
 import pytest
 
 from uvms_qp._validation import as_array, as_matrix, as_scalar, as_vector
-from uvms_qp.bench.stacks import demo_stack
-from uvms_qp.controller import Controller
-from uvms_qp.errors import InputError
-from uvms_qp.hqp import solve_hierarchy
-from uvms_qp.model import load_model
+from uvms_qp.errors import (
+    InputError,
+)
 
 
 @pytest.mark.parametrize(
@@ -49,16 +47,3 @@ def test_real_numbers_of_any_kind_are_accepted():
     for bad in (True, 1j, "1", None):
         with pytest.raises(InputError, match="y: expected a number"):
             as_scalar(bad, "y")
-
-
-@pytest.mark.parametrize("metric", [["1"] * 10, [True] * 10, np.ones(10, dtype=complex)])
-def test_a_controller_metric_must_be_real(metric):
-    model = load_model("bluerov2_heavy_alpha5")
-    with pytest.raises(InputError, match="metric: expected real numbers"):
-        Controller(model, demo_stack(position=[0.5, 0.0, 0.0]), metric=metric)
-
-
-@pytest.mark.parametrize("A", [[["1", "0"]], [[True, 1.0]], [[1j, 0.0]]])
-def test_hierarchy_rows_must_be_real(A):
-    with pytest.raises(InputError, match=r"levels\[0\]\[0\]\.A: expected real numbers"):
-        solve_hierarchy([[(A, [0.0])]], [-1.0, -1.0], [1.0, 1.0])

@@ -16,6 +16,7 @@ family             module
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -48,12 +49,32 @@ class Answer:
 
 
 class Backend(Protocol):
-    """A back-end of the lexicographic problem."""
+    """A back-end of the lexicographic problem.
+
+    Attributes:
+        spec: Its registry entry.
+        time_cap: Cap of one solve [s] on ``clock`` (set by the solver; a back-end whose solves
+            can run long stops at it and reports ``backend_error``).
+        clock: The clock of ``time_cap`` [s] (the solver's; a safe solver's may be a test's).
+    """
 
     spec: SolverSpec
+    time_cap: float
+    clock: Callable[[], float]
 
     def solve(self, problem: Problem) -> Answer:
         """Solve ``problem`` (trusted: validated upstream)."""
 
     def reset(self) -> None:
         """Forget any warm start: the next solve starts cold."""
+
+    def reduce(self, problem: Problem) -> bool:
+        """Leave the level rows that are constants of their level out of the next solves.
+
+        Constants over the higher levels' optimum (after an answer the certificate could not
+        prove, or a failed solve).
+
+        Returns:
+            True when the next solve of ``problem`` differs (rows newly left out), False when
+            the back-end has nothing to reduce (it handles such rows by design).
+        """

@@ -14,23 +14,51 @@ the registry). The equality rows of level k are then frozen at the values ``a_i 
 (unique, because the weighted least-squares objective is strictly convex in ``A x``) and eliminated:
 ``Z <- Z null(A_k Z)`` and ``x_p <- x`` (so ``y = 0`` stays feasible for every later QP). A last QP
 minimises ``x' W x`` over what is left. Only inequality rows are given to qpsolvers, which sidesteps
-wrappers that mishandle equality rows. ``rho`` (relative 1e-10) keeps small dense solvers strictly
-convex; inexact back-ends' answers are sharpened and certified per QP (:mod:`uvms_qp.hqp.kkt`),
-and results are measured, never trusted, in :mod:`uvms_qp.hqp.measure`.
+wrappers that mishandle equality rows. ``rho`` keeps small dense solvers strictly convex; its bias
+is removed by proximal steps (``rho |y - y_j|^2`` around the previous answer) while they converge,
+then the answer's active set is solved exactly on the QP without ``rho`` (a level of condition
+2e4 leaves the proximal steps a factor 0.98 per step along its weak direction; the exact solve
+removes the bias at once); inexact back-ends' answers are sharpened and certified per QP
+(:mod:`uvms_qp.hqp.kkt`), and results are measured and certified, never trusted, in
+:mod:`uvms_qp.hqp.measure`.
+
+Degenerate data, by design:
+
+* every inequality row handed to a back-end (box and hard rows in the reduced space, frozen rows,
+  the level's rows with their slacks) is scaled to unit norm in x (a slack ``t_i`` of a scaled
+  row carries the weight ``w_i |a_i|^2``): row norms spread over 1e-3..1e3 reach the back-end as
+  rows of norm 1;
+* an equality row whose projection on the freedom left is below ``rank_tol |a_i|`` is a constant
+  of the level (its value is fixed by the levels above) and is left out of its QP, and so is a
+  row whose norm is below ``ZTOL`` of the problem's largest (a zero or tiny row); the rank of
+  the rows frozen into ``Z`` is decided against their unprojected norms, so round-off left by a
+  projection never becomes a direction;
+* a cap per solve (``time_cap`` [s], 50 ms by default, on ``clock``: the solver's, which a safe
+  solver sets to its own; back-ends with a time limit of their own get the time left): a QP is
+  not started after it, and the solve reports ``backend_error`` ("stopped at the time cap") for
+  the ladder to fall back.
 """
 
 from __future__ import annotations
 
 import ctypes
+import difflib
+import inspect
+import math
 import os
+import re
 import sys
 import warnings
+from collections.abc import Callable
 from functools import cache
+from time import perf_counter
 from typing import Any
 
 import numpy as np
 
-from ..._validation import FloatArray
+from ..._validation import FloatArray, as_scalar
+from ...errors import InputError
+from ..degenerate import ZTOL
 from ..hard_set import hard_feasible, hard_point, polish_hard
 from ..kkt import active_set_from, certified_point
 from ..measure import hard_violation
@@ -38,6 +66,7 @@ from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
 from . import Answer
+from .daqp import DAQP_SETTINGS
 
 
 @cache
@@ -70,13 +99,22 @@ def _mute_highs_banner() -> None:
         os.close(saved)
 
 
-def _null_space(M: FloatArray, rtol: float) -> tuple[FloatArray, int]:
-    """Orthonormal basis of the null space of ``M`` and its rank (SVD with relative cut-off)."""
+def _null_space(M: FloatArray, rtol: float, ref: float = 1.0) -> tuple[FloatArray, int]:
+    """Orthonormal basis of the null space of ``M`` and its rank.
+
+    Singular values at or below ``rtol * max(ref, s_max)`` are zero: ``ref`` is the norm of the
+    rows before a projection, so that what a projection leaves of a row in the span of the
+    levels above (round-off, ``1e-16 |a|``) is never taken for a direction.
+    """
     if M.shape[0] == 0:
         return np.eye(M.shape[1]), 0
     _, s, Vt = np.linalg.svd(M, full_matrices=True)
-    rank = int(np.sum(s > rtol * max(1.0, s[0]))) if s.size else 0
+    rank = int(np.sum(s > rtol * max(ref, s[0]))) if s.size else 0
     return Vt[rank:].T.copy(), rank
+
+
+def _row_norms(A: FloatArray) -> FloatArray:
+    return np.sqrt(np.einsum("ij,ij->i", A, A))
 
 
 class _Rows:
@@ -90,16 +128,23 @@ class _Rows:
         self.X: list[FloatArray] = []  # x-space row of each G row (zeros: not freezable)
 
     def add(self, C: FloatArray, lo: FloatArray, hi: FloatArray, margin: float = 0.0,
-            X: FloatArray | None = None) -> None:
-        """Add rows; rows that vanish in the reduced space are constants and are dropped.
+            X: FloatArray | None = None, norms: FloatArray | None = None) -> None:
+        """Add rows scaled to unit x-space norm; rows that vanish in the reduced space are dropped.
 
-        A row whose reduced coefficients are ~0 only restates that ``x_p`` satisfies it (true up to
-        round-off, since ``x_p`` is the previous answer); keeping it could turn a 1e-13 round-off
-        into an infeasible ``0 <= -1e-13``. ``margin`` loosens both sides.
+        A row whose reduced coefficients are ~0 (below 1e-12 of its x-space norm) only restates
+        that ``x_p`` satisfies it (true up to round-off, since ``x_p`` is the previous answer);
+        keeping it could turn a 1e-13 round-off into an infeasible ``0 <= -1e-13``. ``margin``
+        loosens both sides (in the units of the rows). ``norms``: the x-space norm of each row
+        (default: that of ``X``, else of ``C``); the rows and sides are divided by it.
         """
-        live = np.abs(C).max(axis=1, initial=0.0) > 1e-12 if C.shape[1] else np.zeros(
+        if norms is None:
+            norms = _row_norms(X if X is not None else C)
+        ref = np.where(norms > 0.0, norms, 1.0)
+        live = np.abs(C).max(axis=1, initial=0.0) > 1e-12 * ref if C.shape[1] else np.zeros(
             C.shape[0], dtype=bool)
-        C, lo, hi = C[live], lo[live] - margin, hi[live] + margin
+        ref = ref[live]
+        C = C[live] / ref[:, None]
+        lo, hi = (lo[live] - margin) / ref, (hi[live] + margin) / ref
         X = np.zeros((C.shape[0], self.n)) if X is None else X[live]
         up = np.isfinite(hi)
         dn = np.isfinite(lo)
@@ -137,31 +182,60 @@ class CascadeBackend:
         opts = dict(options or {})
         self._qpsolvers = qpsolvers
         self.spec = spec
-        self.rank_tol = float(opts.pop("rank_tol", 1e-10))
-        self.reg = float(opts.pop("reg", spec.reg))
-        self.prox_steps = int(opts.pop("prox_steps", spec.prox_steps))
-        self.mult_tol = float(opts.pop("mult_tol", 1e-7))
+        self.rank_tol = as_scalar(opts.pop("rank_tol", 1e-10), "options['rank_tol']",
+                                  nonnegative=True)
+        self.reg = as_scalar(opts.pop("reg", spec.reg), "options['reg']", nonnegative=True)
+        steps = opts.pop("prox_steps", spec.prox_steps)
+        if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
+            raise InputError(f"options['prox_steps']: expected a non-negative integer, "
+                             f"got {steps!r}")
+        self.prox_steps = int(steps)
+        self.mult_tol = as_scalar(opts.pop("mult_tol", 1e-7), "options['mult_tol']",
+                                  positive=True)
+        _check_settings(spec, opts)
+        #: cap of one solve [s] on ``clock`` (set by the solver from its ``time_cap`` option)
+        self.time_cap = math.inf
+        #: the clock of the cap [s] (the solver's; a safe solver's may be a test's)
+        self.clock: Callable[[], float] = perf_counter
         #: QPs answered by the exact active-set rescue since construction (diagnostics)
         self.rescued = 0
         self._stopped = False  # a QP raised TimeoutError in this solve (deadline guard)
         self._capped = False  # the last QP stopped at its iteration cap
+        self._end = math.inf  # reading of ``clock`` at which this solve's time cap falls
+        self._timed_out = False  # this solve reached its time cap
+        self._big = 0.0  # the largest level row norm of this solve's problem
         self.settings = {**spec.settings, **opts}
         if spec.qp_name == "highs":
             _mute_highs_banner()
 
     # -- one QP -------------------------------------------------------------------------------
     def _qp(self, P: FloatArray, q: FloatArray, rows: _Rows, lb: FloatArray | None,
-            ub: FloatArray | None, extra: Any = None) -> tuple[FloatArray | None, FloatArray]:
+            ub: FloatArray | None, extra: Any = None, floor: float = 1.0
+            ) -> tuple[FloatArray | None, FloatArray]:
         """Solve one QP; return ``z`` and the x-space rows of its strongly active constraints.
+
+        ``floor``: the scale of the Hessian before any projection (rank decisions of an
+        unconstrained QP are taken against it).
 
         A constraint with a positive multiplier is active at *every* optimum of this QP
         (complementary slackness holds between any primal and any dual optimum), so it can be
         frozen as an equality for the lower levels without loss.
         """
         none = np.zeros((0, rows.n))
+        left = self._end - self.clock()
+        if left <= 0.0:  # the time cap: no QP is started after it
+            self._stopped = self._timed_out = True
+            return None, none
         G, h = rows.arrays()
         if G is None and lb is None and ub is None:
-            return np.asarray(np.linalg.lstsq(P, -q, rcond=None)[0], dtype=np.float64), none
+            # unconstrained: least squares with singular values cut against the level's rows
+            # before projection (``floor``), not against P's own (possibly round-off) size
+            top = float(np.abs(np.diag(P)).max(initial=0.0))
+            rcond = min(1.0, self.rank_tol * max(floor, 1e-300) / top) if top > 0.0 else 1.0
+            return np.asarray(np.linalg.lstsq(P, -q, rcond=rcond)[0], dtype=np.float64), none
+        if self.spec.time_setting:
+            extra = {**(extra or {}), self.spec.time_setting: min(
+                left, float(self.settings.get(self.spec.time_setting, math.inf)))}
         Gs, Ps = G, P
         if self.spec.sparse:
             from scipy import sparse
@@ -183,9 +257,11 @@ class CascadeBackend:
             return None, none
         self._capped = not sol.found and _hit_iteration_cap(sol)
         z = sol.x
-        if z is None or not np.all(np.isfinite(z)):
+        if z is None:
             return None, none
         z = np.asarray(z, dtype=np.float64)
+        if z.shape != q.shape or not np.all(np.isfinite(z)):  # HiGHS may return an empty x
+            return None, none
         rescue = not sol.found and not _closest_feasible_is_optimal(sol, G, h, z)
         if rescue and self.spec.exact:
             return None, none
@@ -238,7 +314,7 @@ class CascadeBackend:
         if self._stopped:
             return None, np.zeros((0, rows.n))
         G, h = rows.arrays()
-        cert = active_set_from(P, q, G, h, lb, ub, z0)
+        cert = active_set_from(P, q, G, h, lb, ub, z0, deadline=self._end, clock=self.clock)
         if cert is None:
             return None, np.zeros((0, rows.n))
         self.rescued += 1
@@ -280,6 +356,10 @@ class CascadeBackend:
     def reset(self) -> None:
         """Nothing to forget (every solve starts from scratch)."""
 
+    def reduce(self, problem: Problem) -> bool:
+        """Nothing to reduce: rows the levels above fix are left out of each level's QP."""
+        return False
+
     def solve(self, problem: Problem) -> Answer:
         """Solve level by level; on a failed QP return the last verified point and say so.
 
@@ -288,7 +368,9 @@ class CascadeBackend:
         """
         n = problem.n
         rescued = self.rescued
-        self._stopped = False
+        self._stopped = self._timed_out = False
+        self._end = self.clock() + self.time_cap
+        self._big = float(_row_norms(problem.A[problem.head:]).max(initial=0.0))
         xp = np.zeros(n)
         Z = np.eye(n)
         hard = problem.hard
@@ -300,7 +382,7 @@ class CascadeBackend:
             if gap > self.spec.hard_tol * problem.hard_scale:
                 return Answer(xp, Status.HARD_INFEASIBLE,
                               f"hard equality rows are inconsistent (gap {gap:.2e})")
-            Z, _ = _null_space(E, self.rank_tol)
+            Z, _ = _null_space(E, self.rank_tol, float(_row_norms(E).max(initial=0.0)))
         frozen: list[tuple[FloatArray, FloatArray, FloatArray]] = []
         margin = self.spec.freeze_margin
         x = xp.copy()
@@ -324,7 +406,8 @@ class CascadeBackend:
                                level.upper[ineq] + v[ineq] + scale))
             pinned = np.vstack((level.A[eq], active))
             if pinned.shape[0] and Z.shape[1]:
-                N, _ = _null_space(pinned @ Z, self.rank_tol)
+                ref = float(_row_norms(pinned).max(initial=0.0))
+                N, _ = _null_space(pinned @ Z, self.rank_tol, ref)
                 Z = Z @ N
             xp = x
         if Z.shape[1]:
@@ -339,41 +422,76 @@ class CascadeBackend:
                frozen: list[tuple[FloatArray, FloatArray, FloatArray]]
                ) -> tuple[FloatArray | None, FloatArray]:
         p = Z.shape[1]
-        eq = level.lower == level.upper
-        ineq = ~eq
         w = level.weights if level.weights is not None else np.ones(level.m)
+        norms = _row_norms(level.A)
+        # a row of norm below ZTOL of the problem's largest is a constant of the level (its
+        # value moves by |a| |x| at most): left out of the QP, like a zero row
+        live = norms > ZTOL * self._big
+        eq = (level.lower == level.upper) & live
+        ineq = (level.lower != level.upper) & live
+        if eq.any():
+            AZ = level.A[eq] @ Z
+            # a row the levels above fix (its projection is round-off) is a constant here
+            eq_live = _row_norms(AZ) > self.rank_tol * norms[eq]
+            AZ, we = AZ[eq_live], w[eq][eq_live]
+            r0 = (level.A[eq] @ xp - level.lower[eq])[eq_live]
         q_t = int(ineq.sum())
         width = p + q_t
         P = np.zeros((width, width))
         q = np.zeros(width)
-        if eq.any():
-            AZ = level.A[eq] @ Z
-            r0 = level.A[eq] @ xp - level.lower[eq]
-            WA = w[eq][:, None] * AZ
+        floor = 0.0
+        if eq.any() and AZ.shape[0]:
+            WA = we[:, None] * AZ
             P[:p, :p] = AZ.T @ WA
             q[:p] = WA.T @ r0
+            floor = float((we * norms[eq][eq_live] ** 2).max())
+        # the level's inequality rows scaled to unit norm: slack t_i of the scaled row, weight
+        # w_i |a_i|^2 (the same objective w_i (|a_i| t_i)^2)
+        ni = np.where(norms[ineq] > 0.0, norms[ineq], 1.0)
         if q_t:
-            P[p:, p:] = np.diag(w[ineq])
+            P[p:, p:] = np.diag(w[ineq] * ni * ni)
         rows, lb, ub = self._constraints(problem, xp, Z, width, frozen)
         if q_t:
-            Ci = np.hstack((level.A[ineq] @ Z, np.eye(q_t)))
+            Ci = np.hstack((level.A[ineq] @ Z, np.diag(ni)))
             base = level.A[ineq] @ xp
-            rows.add(Ci, level.lower[ineq] - base, level.upper[ineq] - base)
+            rows.add(Ci, level.lower[ineq] - base, level.upper[ineq] - base, norms=ni)
         scale = max(1.0, float(np.abs(np.diag(P)).max()))
         attempts: list[tuple[float, int, Any]] = [(self.reg, self.prox_steps, None)]
         attempts += [(self.reg, self.prox_steps, extra) for extra in self.spec.retries]
-        attempts.append((max(self.reg * 100.0, 1e-8), 3, None))
+        attempts.append((max(self.reg * 100.0, 1e-8), self.prox_steps, None))
         for rel, steps, extra in attempts:
             rho = rel * scale
             Pr = P.copy()
             Pr[:p, :p] += rho * np.eye(p)
-            z, active = self._qp(Pr, q, rows, lb, ub, extra)
+            z, active = self._qp(Pr, q, rows, lb, ub, extra, floor)
+            # proximal steps while they converge: each shrinks the bias of rho along a
+            # direction of curvature sigma^2 by rho / (rho + sigma^2); once a step moves less
+            # than half the one before (slow directions, or round-off) the answer is sharpened
+            # on the exact QP instead
+            moved_before = math.inf
             for _ in range(steps if rho > 0.0 else 0):
                 if z is None:
                     break
                 qr = q.copy()
                 qr[:p] -= rho * z[:p]  # proximal centre at the previous answer
-                z, active = self._qp(Pr, qr, rows, lb, ub, extra)
+                z_new, active = self._qp(Pr, qr, rows, lb, ub, extra, floor)
+                if z_new is None:
+                    z = None
+                    break
+                moved = float(np.abs(z_new[:p] - z[:p]).max(initial=0.0))
+                z = z_new
+                if moved <= 1e-12 * max(1.0, float(np.abs(z[:p]).max(initial=0.0))) or (
+                        moved > 0.5 * moved_before):
+                    break
+                moved_before = moved
+            if z is not None and rho > 0.0:
+                # the regularised answer's active set, solved exactly on the QP itself
+                G, h = rows.arrays()
+                cert = certified_point(P, q, G, h, lb, ub, z)
+                if cert is not None:
+                    z = cert.z
+                    active = self._strong(rows, G, h, lb, ub, z, cert.lam, cert.lam_box,
+                                          self.mult_tol)
             if z is not None and self._feasible(problem, xp + Z @ z[:p]):
                 return z, active
             if z is None and self._capped:
@@ -391,7 +509,7 @@ class CascadeBackend:
             z0 = np.concatenate((y0, np.zeros(q_t)))
             if q_t:
                 yi = level.A[ineq] @ (xp + Z @ y0)
-                z0[p:] = np.clip(0.0, level.lower[ineq] - yi, level.upper[ineq] - yi)
+                z0[p:] = np.clip(0.0, level.lower[ineq] - yi, level.upper[ineq] - yi) / ni
             z, active = self._rescue(P, q, rows, lb, ub, z0)
             if z is not None and self._feasible(problem, xp + Z @ z[:p]):
                 return z, active
@@ -425,6 +543,11 @@ class CascadeBackend:
 
     def _failure(self, problem: Problem, x: FloatArray, k: int) -> Answer:
         where = f"level {k}" if k < len(problem.sizes) else "the final regularisation"
+        if self._timed_out:
+            return Answer(x, Status.BACKEND_ERROR,
+                          f"{self.spec.name}: stopped at the time cap of "
+                          f"{self.time_cap * 1e3:.0f} ms in {where}; x solves levels < {k} only",
+                          {"time_capped": True})
         suspect = k == 0 or not np.all(np.isfinite(x)) or not self._feasible(problem, x)
         if suspect and not hard_feasible(problem):
             return Answer(x, Status.HARD_INFEASIBLE, "the hard box and hard rows admit no point")
@@ -441,6 +564,81 @@ def _finite_abs(v: FloatArray) -> FloatArray:
     ``np.nan_to_num``'s dozen.
     """
     return np.abs(np.where(np.isfinite(v), v, 0.0))
+
+
+_OWN_OPTIONS = ("rank_tol", "reg", "prox_steps", "mult_tol", "level_tol", "hard_tol")
+
+
+@cache
+def backend_settings(qp_name: str) -> frozenset[str] | None:
+    """Names of the settings qpsolvers passes on to the back-end ``qp_name``.
+
+    Read from the installed back-end itself (its settings object or its solve function's
+    signature), so a setting it does not know is refused here instead of being ignored or
+    making every QP fail. None when the back-end offers no way to list them (not checked).
+    """
+    names: set[str] = {"verbose"}
+    try:
+        if qp_name == "quadprog":
+            import quadprog
+
+            names |= set(inspect.signature(quadprog.solve_qp).parameters) - {
+                "G", "a", "C", "b", "meq"}
+        elif qp_name == "daqp":
+            names |= DAQP_SETTINGS
+        elif qp_name == "proxqp":
+            import proxsuite
+
+            doc = (proxsuite.proxqp.dense.solve.__doc__ or "").splitlines()
+            found = set(re.findall(r"(\w+):", doc[0])) if doc else set()
+            if not found:
+                return None
+            names |= found - {"H", "g", "A", "b", "C", "l", "u", "x", "y", "z"}
+            names.add("backend")
+        elif qp_name == "piqp":
+            import piqp
+
+            names |= _public(piqp.DenseSolver().settings) | {"backend"}
+        elif qp_name == "clarabel":
+            import clarabel
+
+            names |= _public(clarabel.DefaultSettings())
+        elif qp_name == "highs":
+            import highspy
+
+            names |= _public(highspy.HighsOptions())
+        elif qp_name == "osqp":
+            import osqp
+
+            names |= _public(osqp.ext_builtin.OSQPSettings()) | {"raise_error"}
+        else:
+            return None
+    except Exception:  # an unexpected version of the back-end: leave its settings unchecked
+        return None
+    return frozenset(names)
+
+
+def _public(obj: Any) -> set[str]:
+    """Public attribute names of a settings object."""
+    return {a for a in dir(obj) if not a.startswith("_") and not callable(getattr(obj, a))}
+
+
+def _check_settings(spec: SolverSpec, settings: dict[str, Any]) -> None:
+    """Refuse a back-end setting the back-end does not know (it would be ignored, or fail).
+
+    Raises:
+        InputError: naming the setting, the closest known names and where the rest are listed.
+    """
+    known = backend_settings(spec.qp_name) if settings else None
+    if known is None:
+        return
+    for key in settings:
+        if key not in known:
+            close = difflib.get_close_matches(key, [*known, *_OWN_OPTIONS], n=3)
+            hint = f" (did you mean {', '.join(map(repr, close))}?)" if close else ""
+            raise InputError(
+                f"options: unknown setting {key!r} for solver {spec.name!r}{hint}; known: "
+                f"{', '.join(_OWN_OPTIONS)} and the settings of the {spec.qp_name} back-end")
 
 
 def _hit_iteration_cap(sol: Any) -> bool:

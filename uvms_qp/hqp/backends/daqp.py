@@ -40,12 +40,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from time import perf_counter
 from typing import Any
 
 import numpy as np
 
 from ..._validation import FloatArray, as_scalar
 from ...errors import InputError
+from ..degenerate import Reduction, dependent_rows
 from ..hard_set import hard_feasible, polish_hard
 from ..measure import Measured, measure
 from ..problem import Problem
@@ -234,13 +236,46 @@ class DaqpBackend:
         self.rho_soft = float(merged.get("rho_soft", 1e-8))
         self.open_binding: Callable[[], DaqpBinding] = open_daqp
         self._ladder = (self.rho_soft, *[r for r in self.rho_ladder if r != self.rho_soft])
+        self.time_cap = math.inf  # DAQP's own ``time_limit`` setting bounds its solves
+        self.clock: Callable[[], float] = perf_counter
         self._setups: dict[Problem, _Setup] = {}
         self._last: tuple[Problem | None, _Setup | None] = (None, None)
+        self._reductions: dict[Problem, Reduction] = {}
 
     def reset(self) -> None:
-        """Forget every set-up: the next solve sets DAQP up afresh (a cold start)."""
+        """Forget every set-up: the next solve sets DAQP up afresh (a cold start).
+
+        The rows left out by :meth:`reduce` stay out (they are a property of the problem's
+        structure, and every answer is certified on the full problem anyway).
+        """
         self._setups.clear()
         self._last = (None, None)
+
+    def reduce(self, problem: Problem) -> bool:
+        """Leave the level rows that are constant over the higher levels' optimum out of DAQP.
+
+        DAQP 0.11's hierarchical mode can drop a level whose row lies in the span of the
+        equality rows above it (a repeated or combined row, a level left without freedom) and
+        still report success; without those rows (:func:`~uvms_qp.hqp.degenerate.dependent_rows`,
+        constants of the level, measured on the full problem afterwards) it gives the exact
+        optimum. The rows found are left out of every later solve of ``problem`` (a controller's
+        problem keeps its structure from tick to tick) until a certificate fails again and the
+        rows are found afresh.
+
+        Returns:
+            True when the rows left out changed.
+        """
+        drop = dependent_rows(problem.A, problem.lo, problem.hi, problem.n, problem.mh,
+                              problem.sizes)
+        old = self._reductions.get(problem)
+        if not drop.any():
+            return self._reductions.pop(problem, None) is not None
+        if old is not None and np.array_equal(old.drop, drop):
+            return False
+        if len(self._reductions) >= _KEEP:
+            self._reductions.pop(next(iter(self._reductions)))
+        self._reductions[problem] = Reduction(problem, drop)
+        return True
 
     def _setup(self, problem: Problem) -> _Setup:
         last, setup = self._last
@@ -263,11 +298,35 @@ class DaqpBackend:
         return setup
 
     def solve(self, problem: Problem) -> Answer:
-        """Solve every level in one DAQP call; accept, or walk the ``rho_soft`` ladder."""
+        """Solve every level in one DAQP call; accept, or walk the ``rho_soft`` ladder.
+
+        A problem with rows left out by :meth:`reduce` is solved without them (the answer is
+        measured on the full problem by the caller); a failed solve is tried once more after
+        :meth:`reduce`.
+        """
+        answer = self._solve_reduced(problem)
+        if answer.status is not _OPTIMAL and self.reduce(problem):
+            # DAQP failed (a zero row with a nonzero target makes it call the hierarchy
+            # infeasible): once more without the rows that are constants of their level
+            answer = self._solve_reduced(problem)
+        return answer
+
+    def _solve_reduced(self, problem: Problem) -> Answer:
+        reduction = self._reductions.get(problem)
+        if reduction is None:
+            return self._solve(problem)
+        answer = self._solve(reduction.fill(problem))
+        answer.measured = None  # measured on the reduced rows: the full problem measures again
+        answer.info["reduced_rows"] = int(reduction.drop.sum())
+        return answer
+
+    def _solve(self, problem: Problem) -> Answer:
         setup = self._setup(problem)
         if setup.flag < 0:
             self.reset()
-            if setup.flag == -1 or not hard_feasible(problem):
+            # DAQP's "infeasible" covers the soft levels too (a zero row with a nonzero
+            # target): the hard set is judged on its own
+            if not hard_feasible(problem):
                 return Answer(None, Status.HARD_INFEASIBLE,
                               "the hard box and hard rows admit no point", {"exitflag": setup.flag})
             return Answer(None, Status.BACKEND_ERROR,
@@ -303,7 +362,7 @@ class DaqpBackend:
         self.reset()  # set up afresh after a failure
         reason = _FLAGS.get(flag, "unknown failure")
         status = Status.BACKEND_ERROR
-        if flag == -1 or not hard_feasible(problem):
+        if not hard_feasible(problem):
             status = Status.HARD_INFEASIBLE
             reason = "the hard box and hard rows admit no point"
         x = np.array(raw, dtype=np.float64) if raw is not None else None

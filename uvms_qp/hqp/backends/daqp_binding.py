@@ -39,7 +39,10 @@ _VP = C.c_void_p
 # daqp_update_ldp mask bits (DAQP constants.h)
 UPDATE_M = 2
 UPDATE_D = 8
+UPDATE_V = 4
 UPDATE_SENSE = 16
+_COLD = UPDATE_V | UPDATE_D | UPDATE_SENSE
+_COLD_ROWS = UPDATE_M | UPDATE_V | UPDATE_D | UPDATE_SENSE
 
 
 class _Problem(C.Structure):
@@ -145,11 +148,14 @@ class DaqpBinding(Protocol):
 
     Attributes:
         x: Primal solution of the latest solve (may be a reused buffer: copy to keep).
+        lam: Multipliers of the latest solve, one per constraint (simple bounds first; > 0 at
+            an upper side, < 0 at a lower side; may be a reused buffer).
         solve_time: DAQP's own time of the latest solve [s].
         iterations: Iterations of the latest solve.
     """
 
     x: FloatArray
+    lam: FloatArray
     solve_time: float
     iterations: int
 
@@ -183,6 +189,9 @@ class DaqpBinding(Protocol):
 
     def solve(self) -> int:
         """Solve; returns the exit flag (1 optimal, 2 soft optimal, negative on failure)."""
+
+    def solve_cold(self, rows: bool) -> int:
+        """Re-read ``f``, the sides (and rows), solve from an empty working set; sets ``lam``."""
 
 
 def open_daqp() -> DaqpBinding:
@@ -255,7 +264,9 @@ class NativeDaqp:
         self._has_model = False
         self._warm = False  # qp.sense points at the working set of the latest solve
         self.x = np.zeros(0)
-        self._lam = np.zeros(0)
+        self.lam = np.zeros(0)
+        self._empty = np.zeros(0, dtype=np.intc)  # an empty working set (cold starts)
+        self._empty_ptr: Any = None
         self._res = _Result()
         self._res_ref = C.byref(self._res)
         self._mask = C.c_int(UPDATE_M | UPDATE_D | UPDATE_SENSE)
@@ -310,8 +321,10 @@ class NativeDaqp:
             return flag, float(setup_time.value)
         self._has_model = True
         self.x = np.zeros(n)
-        self._lam = np.zeros(m)
-        self._res.x, self._res.lam = _ptr(self.x), _ptr(self._lam)
+        self.lam = np.zeros(m)
+        self._empty = np.zeros(m, dtype=np.intc)
+        self._empty_ptr = _ptr(self._empty, _IP)
+        self._res.x, self._res.lam = _ptr(self.x), _ptr(self.lam)
         return flag, float(setup_time.value)
 
     def _reset_workspace(self, settings: _Settings) -> None:
@@ -377,6 +390,16 @@ class NativeDaqp:
         self.iterations = res.iter
         return res.exitflag  # an int (ctypes field)
 
+    def solve_cold(self, rows: bool) -> int:
+        """Re-read ``f``, the sides (and rows), solve from an empty working set; ``lam`` is set."""
+        lib, qp, res = self._lib, self._qp, self._res
+        qp.sense = self._empty_ptr  # DAQP copies it: the array stays empty
+        lib.daqp_update_ldp(_COLD_ROWS if rows else _COLD, self._work, self._qp_ref)
+        self._warm = False
+        lib.daqp_solve(self._res_ref, self._work)
+        self.iterations = res.iter
+        return int(res.exitflag)
+
 
 class ModelDaqp:
     """:class:`DaqpBinding` through ``daqp.Model`` (see the module docstring)."""
@@ -387,7 +410,10 @@ class ModelDaqp:
         self._model = daqp.Model()
         self._held: tuple[np.ndarray, ...] = ()
         self._rho: tuple[FloatArray, FloatArray] | None = None
+        self._empty = np.zeros(0, dtype=np.intc)
+        self._f = np.zeros(0)
         self.x = np.zeros(0)
+        self.lam = np.zeros(0)
         self.solve_time = 0.0
         self.iterations = 0
 
@@ -396,7 +422,9 @@ class ModelDaqp:
               ) -> tuple[int, float]:
         """``daqp.Model.setup``; the arrays are kept and handed over again by :meth:`refresh`."""
         self._held = (A, bupper, blower)
+        self._f = f
         m = bupper.shape[0]
+        self._empty = np.zeros(m, dtype=np.intc)
         self._rho = None
         flag, setup_time = self._model.setup(H, f, A, bupper, blower, sense,
                                              break_points=break_points)
@@ -455,6 +483,16 @@ class ModelDaqp:
         """``daqp.Model.solve``: sets ``x`` (fresh), time and iterations; returns the flag."""
         x, _, flag, info = self._model.solve()
         self.x = x
+        self.lam = np.asarray(info["lam"], dtype=np.float64)
         self.solve_time = float(info["solve_time"])
         self.iterations = int(info["iterations"])
         return int(flag)
+
+    def solve_cold(self, rows: bool) -> int:
+        """``daqp.Model.update`` of ``f``, sides (and rows), empty working set; then solve."""
+        A, bu, bl = self._held
+        if rows:
+            self._model.update(f=self._f, A=A, bupper=bu, blower=bl, sense=self._empty)
+        else:
+            self._model.update(f=self._f, bupper=bu, blower=bl, sense=self._empty)
+        return self.solve()

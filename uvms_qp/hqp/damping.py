@@ -1,0 +1,398 @@
+r"""Singular-value damping of a lexicographic problem that keeps the hierarchy exact elsewhere.
+
+A level whose rows are nearly singular in the freedom the higher levels leave (a stretched arm, a
+station-keeping level that conflicts with the tool task) has an undamped least-squares optimum
+that asks ``b_i / sigma_i`` along the weak direction: rates far beyond any bound for a tiny gain
+in the level's residual. The box clips it to a vertex, one period of motion crosses the
+singularity, and the optimum jumps to the opposite vertex: the command bangs between its bounds.
+
+The damping here is the variable, per-direction damping of Nakamura and Hanafusa (1986) and
+Maciejewski and Klein (1988), applied per level inside the hierarchy as in the damped HQP of
+Escande, Mansard and Wieber (2014). For level ``k``, with ``Z`` an orthonormal basis of the
+freedom left by the higher levels' active rows (in the metric ``W`` of the final regularisation,
+``y = W^(1/2) x``), the level's weighted rows are scaled to unit norm (``D``, so that units and
+scale drop out: a singular value is then a pure measure of how nearly the rows depend on each
+other and on the higher levels) and ``D A_k W^(-1/2) Z = U S V'``. Every direction with
+``sigma_i < epsilon_i`` gets one damping row appended to the level,
+
+    lambda_i (Z v_i)' W^(1/2) x = 0,   lambda_i = c_i sqrt(epsilon_i^2 - sigma_i^2),
+
+with ``c_i = |D^(-1) u_i|`` the rows' own scale along that direction. In the normalised units
+the level then answers ``sigma_i b_i / epsilon_i^2`` along ``v_i`` instead of
+``b_i / sigma_i``: bounded by ``|b_i| / epsilon_i``, continuous through the singularity, equal to
+the undamped value at ``sigma_i = epsilon_i``; every other direction is untouched. Directions with
+``sigma_i >= epsilon_i`` get no row: away from singularities no row is added at all and the
+answer is the undamped lexicographic optimum, bit for bit.
+
+The threshold is ``epsilon_i = max(epsilon, sqrt(dt |b_i|))``, ``b_i`` the level's demand along
+the direction (normalised units, from the undamped answer). In closed loop the damped answer
+moves the singular value by ``dt g sigma_i b_i / epsilon_i^2`` per period (``g``, the change of
+``sigma`` per unit of motion, is of order 1 per radian in normalised units), so
+``sigma_(k+1) = (1 - dt g |b_i| / epsilon_i^2) sigma_k`` near the singularity: monotone, without
+the overshoot that is the chatter, when ``epsilon_i^2 >= dt g |b_i|``. The demand term keeps that
+condition at large demands and long periods; ``epsilon`` is the floor.
+
+Damping does not consume the null space: ``v_i`` lies in the row space of the level's rows in
+``Z`` (``sigma_i > 0``), so any direction the level's own rows leave free to the lower levels is
+orthogonal to ``v_i`` and satisfies the damping rows whatever it is. The lower levels keep
+exactly the freedom ``null(A_k)`` they have without damping. Directions with ``sigma_i = 0`` (to
+round-off) are not damped: the level's rows do not see them.
+
+The active rows come from an undamped answer ``x``: every equality row, and the inequality rows
+at or beyond a side (a row the level cannot satisfy counts as active). They restrict ``Z`` for
+the levels below. The rows a level damps are its equality rows and the active inequality rows
+that demand motion (a side that excludes zero, ``lo > 0`` or ``hi < 0``: a floor already
+crossed): an inequality row that zero motion satisfies asks for no rate, and a damping row on it
+would pin a direction the row leaves free once it is no longer active. Hard rows active at ``x``
+restrict ``Z`` from the start; the box does not (it is what the damping keeps the rates away
+from, not a kinematic constraint of the level). The active set is the undamped answer's, so an
+inequality row of a higher level that a lower level pushes onto its side enters that level's
+freedom: near a singularity, such a lower level can change how a higher one is damped.
+
+Cost: a screen first tests all the levels at once against lower bounds on their singular values
+(one or two Cholesky factorisations of Gram matrices of the stacked unit active rows, see
+:func:`_screen`). Away from singularities it proves that no direction is weak and nothing else is
+computed; otherwise the levels are examined one by one as above.
+
+A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
+of the user's problem: a certificate of the user's problem does not apply to it (see
+:class:`Damping`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import lapack
+
+from .._validation import FloatArray
+from .problem import Problem
+
+_GESDD = lapack.dgesdd
+_POTRF = lapack.dpotrf
+
+#: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
+#: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
+#: its directions are damped (dimensionless; a row at about 3 degrees from the span of the others).
+DEFAULT_THRESHOLD = 0.05
+#: The screen's floor on a block's smallest singular value (unit rows): below it, the block may
+#: be rank deficient and the levels are examined one by one.
+SCREEN_RANK = 1e-6
+#: Singular values at or below ``RANK_RTOL * sigma_max`` (and ``RANK_ATOL``) count as zero.
+RANK_RTOL = 1e-12
+RANK_ATOL = 1e-15
+#: A row counts as active when it is within ``ACTIVE_RTOL * max(1, max |A x|)`` of a side (the
+#: level rows; hard rows: ``ACTIVE_RTOL`` times the problem's hard scale).
+ACTIVE_RTOL = 1e-7
+
+
+@dataclass(frozen=True)
+class Damping:
+    """The damping rows of each level of a problem, and what they are for.
+
+    Attributes:
+        rows: Per level, the damping rows ``D_k`` (r_k, n) (targets 0, weight 1), or None for a
+            level without damping (threshold 0 or no singular value below it).
+        sigma_min: Per level, the smallest nonzero singular value of its unit-norm rows that
+            ask for motion, in the freedom the higher levels leave (``inf`` for a level without
+            such rows or without freedom; NaN below the last level with a threshold, whose
+            singular values are not computed).
+    """
+
+    rows: tuple[FloatArray | None, ...]
+    sigma_min: tuple[float, ...]
+
+    @property
+    def acted(self) -> bool:
+        """True when at least one level got damping rows."""
+        return any(r is not None for r in self.rows)
+
+    @property
+    def damped_levels(self) -> tuple[int, ...]:
+        """Indices of the levels that got damping rows."""
+        return tuple(k for k, r in enumerate(self.rows) if r is not None)
+
+
+def _svd(M: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``U`` (m, m), singular values (descending) and ``V'`` (c, c) of ``M`` (m, c)."""
+    u, s, vt, info = _GESDD(M, compute_uv=1, full_matrices=1)
+    if info != 0:  # pragma: no cover - LAPACK's divide and conquer failed; the slow, sure path
+        u, s, vt = np.linalg.svd(M, full_matrices=True)
+    return u, s, vt
+
+
+def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
+                  dt: float = 0.0) -> Damping:
+    """The damping rows of every level of ``problem`` at its undamped answer ``x``.
+
+    See the module docstring. The problem's metric ``W``, row weights, hard rows and sides are
+    read from its buffers. A screen first bounds every level's singular values from below by
+    those of the stacked active rows (:func:`_screen`); only when that cannot prove that no
+    direction is weak are the levels examined one by one.
+
+    Args:
+        problem: The problem (its box is not used).
+        x: The undamped answer (n,), which fixes the active inequality rows and the demands.
+        thresholds: Per level ``epsilon`` (>= 0; 0: no damping), dimensionless.
+        dt: Control period [s] of the closed loop (0: no demand term in the threshold).
+
+    Returns:
+        The damping rows and the smallest singular value of each level (a lower bound on it
+        when the screen proves that no level needs damping).
+    """
+    p = len(problem.spans)
+    last = max((k for k, e in enumerate(thresholds) if e > 0.0), default=-1)
+    if last < 0:
+        return Damping((None,) * p, (math.nan,) * p)
+    head, end = problem.head, problem.spans[last][1]
+    A, lo, hi = problem.A[head:end], problem.lo[head:end], problem.hi[head:end]
+    z = A @ x
+    clipped = np.minimum(np.maximum(z, lo), hi)
+    slack = z - clipped  # what each row misses
+    tol = ACTIVE_RTOL * max(1.0, float(np.abs(z).max()))
+    # active: at or beyond a side (an equality row always; an infinite side never)
+    active = (clipped - lo <= tol) | (hi - clipped <= tol)
+    root = np.sqrt(problem.W)
+    hard = _active_hard(problem, x, root) if problem.mh else None
+    eps = [float(e) for e in thresholds[:last + 1]]
+    spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+    y_norm = math.sqrt(float(x.dot(problem.W * x)))
+    bounds = _screen(A, root, active, lo, hi, slack, hard, spans, eps, dt, y_norm)
+    if bounds is not None:
+        return Damping((None,) * p, (*bounds, *(math.nan,) * (p - last - 1)))
+    eq = lo == hi
+    demanding = active & (eq | (lo > 0.0) | (hi < 0.0))  # a side that excludes zero
+    y = x * root
+    scaled = A / root  # rows over y = W^(1/2) x
+    norms = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
+    norms[norms == 0.0] = 1.0
+    unit = scaled / norms[:, None]  # unit rows: the row weights and units drop out
+    slack = slack / norms  # what each row misses (normalised)
+    weighted = norms * np.sqrt(problem.w[:end - head])  # the weighted rows' own scale
+    Z = None if hard is None else _null(hard)  # None: all the freedom
+    rows: list[FloatArray | None] = [None] * p
+    sigmas = [math.nan] * p
+    for k, (a, b) in enumerate(spans):
+        act, dem = active[a:b], demanding[a:b]
+        if not act.any() or (Z is not None and Z.shape[1] == 0):
+            sigmas[k] = math.inf
+            continue
+        M = unit[a:b][act]
+        if Z is not None:
+            M = M @ Z
+        same = bool(np.array_equal(act, dem))
+        d = np.flatnonzero(dem) + a  # the rows that ask for motion
+        D = M if same else M[dem[act]]
+        yz = y if Z is None else Z.T @ y
+        svd = None
+        if d.size:
+            if same and k < last:  # the vectors are needed for the freedom below anyway
+                svd = _svd(M)
+                sv = svd[1]
+            else:  # singular values first: the vectors only when a direction may be weak
+                sv = _GESDD(D, compute_uv=0)[1]
+            r = _rank(sv)
+            sigmas[k] = float(sv[r - 1]) if r else math.inf
+            if r and _may_be_weak(sv[:r], eps[k], dt, float(np.linalg.norm(yz)),
+                                  float(np.linalg.norm(slack[d]))):
+                u, sv, vt = svd if svd is not None else _svd(D)
+                rows[k] = _damping_rows(eps[k], dt, u, sv, vt, r, weighted[d], Z, root,
+                                        slack[d], yz)
+        else:
+            sigmas[k] = math.inf
+        if k < last:
+            if svd is None:
+                svd = _svd(M)
+            null = svd[2][_rank(svd[1]):].T
+            Z = null if Z is None else Z @ null
+    return Damping(tuple(rows), tuple(sigmas))
+
+
+def _may_be_weak(s: FloatArray, eps: float, dt: float, y_norm: float, slack_norm: float) -> bool:
+    """Whether a singular value may be below its threshold, from bounds on the demands.
+
+    The demand along direction ``i`` is ``s_i v_i' Z' y - u_i' slack`` (see
+    :func:`_damping_rows`), at most ``s_i |Z' y| + |slack|`` in size; a direction with
+    ``s_i^2 >= max(eps^2, dt (s_i |Z' y| + |slack|))`` is not weak whatever its vectors.
+    """
+    if eps <= 0.0:
+        return False
+    limit = np.maximum(eps * eps, dt * (s * y_norm + slack_norm))
+    return bool((s * s < limit).any())
+
+
+def _needed(eps: float, dt: float, y_norm: float, slack_norm: float) -> float:
+    """The least singular value that is not weak whatever the direction's vectors.
+
+    ``max(eps, s*)`` with ``s*`` the positive root of ``s^2 = dt (s |y| + |slack|)``: above
+    both, ``s^2 >= max(eps^2, dt (s |Z' y| + |slack|))`` (:func:`_may_be_weak`).
+    """
+    t = dt * y_norm
+    return max(eps, 0.5 * (t + math.sqrt(t * t + 4.0 * dt * slack_norm)))
+
+
+def _unit(rows: FloatArray, root: FloatArray) -> FloatArray:
+    """``rows`` over ``y = W^(1/2) x`` scaled to unit norm (zero rows stay zero)."""
+    scaled = rows / root
+    norms = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
+    norms[norms == 0.0] = 1.0
+    return np.asarray(scaled / norms[:, None], dtype=np.float64)
+
+
+def _above(G: FloatArray, floor2: FloatArray | float) -> bool:
+    """Whether ``G - diag(floor2)`` is positive definite (``G`` is overwritten).
+
+    With ``G`` the Gram matrix of a block of rows ``R`` (``R R'`` for a wide block, with
+    ``floor2 = floor^2 D^2``, ``D`` its row norms; ``R' D^-2 R`` for a tall one, with
+    ``floor2 = floor^2``): every singular value of the unit rows ``D^-1 R`` (the ``min(m, n)``
+    of them) exceeds ``floor``. A Cholesky factorisation succeeds exactly when the matrix is
+    positive definite.
+    """
+    G.flat[::G.shape[0] + 1] -= floor2
+    return bool(_POTRF(G, lower=0, clean=0, overwrite_a=1)[1] == 0)
+
+
+def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, lo: FloatArray,
+            hi: FloatArray, slack: FloatArray, hard: FloatArray | None,
+            spans: Sequence[tuple[int, int]], eps: Sequence[float], dt: float,
+            y_norm: float) -> list[float] | None:
+    """Lower bounds on each level's singular values when they prove that no level needs damping.
+
+    The singular values of a level's rows in the freedom ``Z`` the rows above it leave are
+    bounded from below by those of all the rows down to it stacked: with ``H`` the rows above,
+    ``min_u_H |H' u_H + A_k' u| = |Z Z' A_k' u|``, so ``sigma_min([H; A_k]) <= sigma_min(A_k Z)``
+    (for a stack of more than ``n`` rows, its ``n``-th value bounds the ``dim Z``-th of
+    ``A_k Z``), and a stack of at most ``n`` rows only loses in its smallest value when rows are
+    added (interlacing), as the rows that ask for motion gain against all the active rows. So
+    one test of the unit active rows (the active hard rows first) of the levels that fit in
+    ``n`` rows bounds all of them; the level whose rows overflow the freedom left is tested with
+    the rows above it (its rows that ask for motion too, when they are fewer), and when those
+    rows have rank ``n`` the levels below have no freedom. Each test is a Cholesky
+    factorisation of a Gram matrix (:func:`_above`) at the least value that rules out a weak
+    direction of every level it covers (:func:`_needed`, with the level's slack).
+
+    Args:
+        A: Level rows (m, n) of the levels ``0..last`` (not normalised).
+        root: ``W^(1/2)`` (n,).
+        active: Per row, active at the undamped answer.
+        lo: Lower sides (m,).
+        hi: Upper sides (m,).
+        slack: Per row, what it misses (in the row's own units).
+        hard: The active hard rows (unit, over ``y``), or None.
+        spans: ``(start, end)`` of each level's rows in ``A``.
+        eps: Threshold per level.
+        dt: Control period [s].
+        y_norm: ``|W^(1/2) x|``.
+
+    Returns:
+        Per level a proven lower bound on its smallest singular value (``inf`` for a level
+        without active rows in the freedom left), or None when the tests cannot prove that no
+        level needs damping.
+    """
+    n, p = A.shape[1], len(spans)
+    act = active.tolist()
+    mh = 0 if hard is None else hard.shape[0]
+    counts = [sum(act[a:b]) for a, b in spans]  # active rows per level
+    fit, used = 0, mh  # the levels whose active rows, with those above, fit in n rows
+    while fit < p and used + counts[fit] <= n:
+        used += counts[fit]
+        fit += 1
+    last = spans[min(fit, p - 1)][1]  # down to the level that overflows, if one does
+    picked = np.flatnonzero(active[:last])
+    scaled = A[picked] / root  # rows over y
+    if mh:
+        scaled = np.vstack((hard, scaled))
+    gram = scaled.dot(scaled.T)
+    squares = gram.diagonal().tolist()  # squared row norms
+    if min(squares, default=1.0) <= 0.0:
+        return None  # a zero active row
+    missed = slack[picked].tolist()
+    floors, start = [], mh  # the least value each level's directions may have
+    for k in range(min(fit + 1, p)):
+        c = counts[k]
+        if eps[k] > 0.0 and c:
+            own = math.sqrt(sum(v * v / q for v, q in zip(
+                missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
+            floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
+        else:
+            floors.append(SCREEN_RANK)
+        start += c
+    bounds = [math.inf] * p
+    floor = max(floors[:fit], default=SCREEN_RANK)
+    if used and not _above(gram[:used, :used].copy(), floor * floor * gram.diagonal()[:used]):
+        return None
+    for k in range(fit):
+        if counts[k] and eps[k] > 0.0:
+            bounds[k] = floor
+    if fit == p or used >= n:
+        return bounds
+    a, b = spans[fit]  # the level whose rows overflow the freedom left
+    need = floors[fit]
+    unit = scaled / np.sqrt(gram.diagonal())[:, None]
+    if not _above(unit.T.dot(unit), need * need):  # rank n: no freedom below
+        return None
+    if eps[fit] > 0.0:
+        asks = [low == high or low > 0.0 or high < 0.0 for low, high, on in
+                zip(lo[a:b].tolist(), hi[a:b].tolist(), act[a:b], strict=True) if on]
+        if not all(asks):  # fewer rows ask for motion: test them with the rows above
+            if not any(asks):
+                need = math.inf
+            else:
+                rows = unit[np.flatnonzero([True] * used + asks)]
+                G = rows.dot(rows.T) if rows.shape[0] <= n else rows.T.dot(rows)
+                if not _above(G, need * need):
+                    return None
+        bounds[fit] = need
+    return bounds
+
+
+def _active_hard(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArray:
+    """The hard rows active at ``x``, scaled to unit norm over ``y = W^(1/2) x``."""
+    n, head = problem.n, problem.head
+    H, lo, hi = problem.A[n:head], problem.lo[n:head], problem.hi[n:head]
+    z = H @ x
+    tol = ACTIVE_RTOL * problem.hard_scale
+    rows = _unit(H[(lo == hi) | (z - lo <= tol) | (hi - z <= tol)], root)
+    return np.asarray(rows[np.einsum("ij,ij->i", rows, rows) > 0.0], dtype=np.float64)
+
+
+def _null(rows: FloatArray) -> FloatArray | None:
+    """Orthonormal basis of the freedom ``rows`` leave (None: all of it, no rows)."""
+    if rows.shape[0] == 0:
+        return None
+    _, s, vt = _svd(rows)
+    return np.asarray(vt[_rank(s):].T, dtype=np.float64)
+
+
+def _damping_rows(eps: float, dt: float, u: FloatArray, s: FloatArray, vt: FloatArray, r: int,
+                  weighted: FloatArray, Z: FloatArray | None, root: FloatArray,
+                  slack: FloatArray, yz: FloatArray) -> FloatArray | None:
+    """The damping rows of one level (None when no direction is below its threshold).
+
+    ``u, s, vt``: SVD of the level's unit rows that ask for motion, in the freedom ``Z`` (rank
+    ``r``); ``weighted`` the norms of those rows weighted (over ``y``), ``slack`` what they miss
+    at the undamped answer (normalised) and ``yz = Z' W^(1/2) x`` the undamped answer in ``Z``.
+    """
+    # the demand along each direction, from the undamped answer (normalised units): what the
+    # level's rows achieve there plus what they miss
+    demand = s[:r] * (vt[:r] @ yz) - u[:, :r].T @ slack
+    limit = np.maximum(eps * eps, dt * np.abs(demand))
+    weak = np.flatnonzero(s[:r] * s[:r] < limit)
+    if weak.size == 0:
+        return None
+    scale = np.linalg.norm(u[:, weak] * weighted[:, None], axis=0)  # the rows' own units
+    lam = scale * np.sqrt(limit[weak] - s[weak] * s[weak])
+    directions = vt[weak] if Z is None else vt[weak] @ Z.T  # (r_w, n) in y
+    return np.asarray(lam[:, None] * directions * root, dtype=np.float64)
+
+
+def _rank(s: FloatArray) -> int:
+    """Number of singular values above the rank tolerance."""
+    values = s.tolist()
+    if not values:
+        return 0
+    tol = max(RANK_ATOL, RANK_RTOL * values[0])
+    return sum(v > tol for v in values)
