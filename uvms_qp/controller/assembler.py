@@ -284,8 +284,9 @@ class StackAssembler:
             solver, box[0], box[1], out.clip_flagged, self.level_names, out.stage, out.clipped,
             out.deadline_missed, out.attempts, TaskResiduals(self.layout, source),
             TaskErrors(self.layout, tuple(map(_LAST_ERROR, tasks))),
-            damping=damping, inactive=tuple(tasks[i].name for i in excluded),
-            ramping={tasks[i].name: tasks[i].activation for i in ramping},
+            damping=damping,
+            inactive=tuple(tasks[i].name for i in excluded) if excluded else (),
+            ramping={tasks[i].name: tasks[i].activation for i in ramping} if ramping else None,
             reversals=Reversals(self.history, ring.copy(), count, self.model.zeta_names))
 
     # ------------------------------------------------------------------------- inspection
