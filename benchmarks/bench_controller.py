@@ -76,7 +76,8 @@ def ours_stepper(model, q0, traj, solver, stack=None):
         start = time.perf_counter()
         result = ctrl.step(model.state(box["q"]), k * DT)
         elapsed = time.perf_counter() - start
-        box["statuses"][result.status.value] = box["statuses"].get(result.status.value, 0) + 1
+        statuses = box["statuses"]  # keyed by the Status (a str): no enum property per tick
+        statuses[result.status] = statuses.get(result.status, 0) + 1
         c_time = result.hierarchy.info.get("daqp_solve_time")  # DAQP's own C solve time [s]
         if c_time is not None:
             box["c_times"].append(c_time)
@@ -183,7 +184,8 @@ def main() -> None:
     print(f"model {model.name}, nv {model.nv}, {args.steps} interleaved steps, dt {DT} s")
     print(f"uvms-qp ({args.solver}, 4 levels, {sum(t.dim for t in ctrl.tasks)} task rows, "
           f"3 bound sets): median {o_med:7.1f} us  p99 {o_p99:7.1f} us  "
-          f"statuses {ours_box['statuses']}  final tool error {ours_err(t_end):.2e} m")
+          f"statuses { {str(k): v for k, v in ours_box['statuses'].items()} }  "
+          f"final tool error {ours_err(t_end):.2e} m")
     print("  split at a fixed state (medians): " + ", ".join(
         f"{k} {stats(v)[0]:.1f} us" for k, v in parts.items()))
     if ours_box["c_times"]:
@@ -240,10 +242,10 @@ def print_breakdown(model, ctrl, q0, reps, step=False):
         state = model.state(q)
         assembler.fill(state, 0.0)
         samples["state+rows+bounds"].append(clock() - start)
-        for task, A, lo, hi in slots:
+        for task, A, sides in slots:
             start = clock()
             state = model.state(q)
-            task.fill(state, 0.0, A, lo, hi)
+            task.fill(state, 0.0, A, sides)
             samples[f"task {task.name} ({type(task).__name__})"].append(clock() - start)
         for c in box_cons:
             lower.fill(-np.inf)

@@ -126,7 +126,7 @@ def rows_tick(model=None):
     slots = []
     for task in stack.tasks:
         A = np.empty((task.dim, model.nv))
-        slots.append((task.fill, A, np.empty(task.dim), np.empty(task.dim)))
+        slots.append((task.fill, A, np.empty((2, task.dim))))
     static_lo, static_hi = np.full(model.nv, -np.inf), np.full(model.nv, np.inf)
     dynamic = []
     for c in stack.constraints:
@@ -138,8 +138,8 @@ def rows_tick(model=None):
 
     def tick(q, t=0.0):
         state = model.state(q)
-        for fill, A, lo, hi in slots:
-            fill(state, t, A, lo, hi)
+        for fill, A, sides in slots:
+            fill(state, t, A, sides)
         lower[:] = static_lo
         upper[:] = static_hi
         for fill_box in dynamic:

@@ -32,6 +32,9 @@ def _holds_bool(value: Any) -> bool:
     return False
 
 
+_F64 = np.dtype(np.float64)
+
+
 def as_array(value: Any, name: str) -> FloatArray:
     """``value`` as a float64 array of any shape, accepting only real numbers.
 
@@ -42,8 +45,12 @@ def as_array(value: Any, name: str) -> FloatArray:
     Raises:
         InputError: not an array of real numbers (ragged nesting, strings, booleans, complex).
     """
-    if type(value) is np.ndarray and value.dtype.kind in "fiu":
-        return value.astype(np.float64, copy=False)  # the common case: no scan needed
+    if type(value) is np.ndarray:  # the common case: no scan needed
+        dtype = value.dtype
+        if dtype is _F64:
+            return value
+        if dtype.kind in "fiu":
+            return value.astype(np.float64, copy=False)
     try:
         array = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nesting
@@ -68,6 +75,10 @@ def as_array(value: Any, name: str) -> FloatArray:
 
 
 def _check_finite(array: FloatArray, name: str, allow_inf: bool) -> None:
+    square = float(np.vdot(array, array))  # NaN exactly when an entry is; inf when one is (or
+    # an overflow, which the entry-by-entry test below clears); vdot sets no warning
+    if square == square and (allow_inf or square != math.inf):
+        return
     if allow_inf:
         bad = np.isnan(array)
         what = "NaN"

@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 _ROW_WEIGHTS = attrgetter("row_weights")
-_LAST_ERROR = attrgetter("last_error")
+_LAST_ERROR = attrgetter("_error")  # as set: made an array by the lazy report
 _ACTIVATION = attrgetter("activation")
 
 
@@ -96,12 +96,12 @@ class StackAssembler:
         row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
         mh = sum(c.rows_dim for c in row_cons)
         self.problem = problem = Problem(nv, mh, [sum(t.dim for t in lv) for lv in levels], metric)
-        A, lo, hi = problem.A, problem.lo, problem.hi
+        A, lo, hi, sides = problem.A, problem.lo, problem.hi, problem.sides
         spans, r = [], problem.head
         for task in self.tasks:
             spans.append((r, r + task.dim))
             r += task.dim
-        self._slots = [(task, A[a:b], lo[a:b], hi[a:b]) for task, (a, b) in zip(
+        self._slots = [(task, A[a:b], sides[:, a:b]) for task, (a, b) in zip(
             self.tasks, spans, strict=True)]
         self._row_slots = []
         r = nv
@@ -153,8 +153,8 @@ class StackAssembler:
                 raise InputError("state: belongs to another model than the controller's")
         except AttributeError:
             raise not_a_state(state) from None
-        for task, A, lo, hi in self._slots:
-            task.fill(state, t, A, lo, hi)
+        for task, A, sides in self._slots:
+            task.fill(state, t, A, sides)
         if not all(map(is_, map(_ROW_WEIGHTS, self.tasks), self._weight_refs)):
             self._refresh_weights()
         self._box[...] = self._static_box
@@ -284,8 +284,9 @@ class StackAssembler:
             solver, box[0], box[1], out.clip_flagged, self.level_names, out.stage, out.clipped,
             out.deadline_missed, out.attempts, TaskResiduals(self.layout, source),
             TaskErrors(self.layout, tuple(map(_LAST_ERROR, tasks))),
-            damping=damping, inactive=tuple(tasks[i].name for i in excluded),
-            ramping={tasks[i].name: tasks[i].activation for i in ramping},
+            damping=damping,
+            inactive=tuple(tasks[i].name for i in excluded) if excluded else (),
+            ramping={tasks[i].name: tasks[i].activation for i in ramping} if ramping else None,
             reversals=Reversals(self.history, ring.copy(), count, self.model.zeta_names))
 
     # ------------------------------------------------------------------------- inspection
@@ -317,7 +318,7 @@ class StackAssembler:
         :func:`~uvms_qp.hqp.validate.finite_ok` overflowed on large finite values).
         """
         named: list[tuple[str, FloatArray, FloatArray, FloatArray]] = [
-            *[(f"task {task.name!r}", A, lo, hi) for task, A, lo, hi in self._slots],
+            *[(f"task {task.name!r}", A, lo, hi) for task, A, (lo, hi) in self._slots],
             *[(f"constraint {c.name!r}", A, lo, hi) for c, A, lo, hi in self._row_slots]]
         for who, A, lo, hi in named:
             if not np.isfinite(A).all():

@@ -90,9 +90,15 @@ class TaskErrors(_Lazy):
 
     def _compute(self) -> dict[str, tuple[float, str]]:
         layout = self._layout
-        return {name: (float(np.sqrt(e @ e)) if e is not None else math.nan, unit)
-                for name, e, unit in zip(layout.names, self._source,  # type: ignore[call-overload]
-                                         layout.error_units, strict=True)}
+        out = {}
+        for name, e, unit in zip(layout.names, self._source,  # type: ignore[call-overload]
+                                 layout.error_units, strict=True):
+            if e is None:
+                out[name] = (math.nan, unit)
+            else:
+                a = np.asarray(e, dtype=np.float64)
+                out[name] = (float(np.sqrt(a @ a)), unit)
+        return out
 
 
 class Reversals:

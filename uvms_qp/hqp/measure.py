@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
-from .problem import Problem
+from .problem import Problem, scale_of
 from .result import OK_STATUSES, HierarchyResult, Status
 
 if TYPE_CHECKING:  # pragma: no cover - the certificate is handed in by the solver
@@ -47,6 +47,7 @@ Certify = Callable[[Problem, FloatArray, FloatArray, list[float], float], "Certi
 _OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
 _SQRT = math.sqrt
 _INF = math.inf
+_minimum, _subtract, _multiply = np.minimum, np.subtract, np.multiply
 
 Measured = tuple[FloatArray, FloatArray, list[float]]
 """``(s, x_clipped, squares)``: slacks at x, x clipped into the box (a view of a fresh array),
@@ -62,9 +63,11 @@ def measure(problem: Problem, x: FloatArray) -> Measured:
     """
     z = problem.A.dot(x)
     c = np.maximum(z, problem.lo)
-    np.minimum(c, problem.hi, out=c)
-    s = np.subtract(z, c)
-    return s, c[:problem.n], problem.G.dot(s * s).tolist()
+    _minimum(c, problem.hi, out=c)
+    s = _subtract(z, c, out=z)
+    squares = problem.squares
+    _multiply(s, s, out=squares)
+    return s, c[:problem.n], problem.G.dot(squares).tolist()
 
 
 def _largest(s: FloatArray) -> tuple[float, int]:
@@ -190,9 +193,8 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             message = (message + "; " if message else "") + "non-finite level residual"
         else:
             status = _OPTIMAL
-            spans = problem.spans
             for k, r in enumerate(residuals):
-                if r > level_tol and r > level_tol * problem.scale(*spans[k]):
+                if r > level_tol and r > level_tol * scale_of(problem.level_sides[k]):
                     infeasible, status = k, _LEVEL_INFEASIBLE
                     break
             if infeasible is not None and certify is not None:
@@ -201,5 +203,4 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
                     status = Status.UNPROVEN
                     message = (message + "; " if message else "") + cert.reason()
     return HierarchyResult(x, status, solver, residuals, infeasible, hv, solve_time, message,
-                           info or {}, s, problem.spans, problem.sides[:, :problem.n].copy(),
-                           cert)
+                           info or {}, s, problem.spans, problem.box.copy(), cert)

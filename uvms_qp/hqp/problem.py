@@ -37,6 +37,16 @@ def _count(value: Any, name: str, least: int) -> int:
     return int(value)
 
 
+def scale_of(sides: FloatArray) -> float:
+    """``max(1, max |finite entry|)`` of a ``(2, m)`` block of sides."""
+    lo, hi = sides.tolist()
+    values = lo if lo == hi else lo + hi  # equality rows: one side is enough
+    big = max(map(abs, values), default=0.0)
+    if big == math.inf:
+        big = max(filter(math.isfinite, map(abs, values)), default=0.0)
+    return big if big > 1.0 else 1.0
+
+
 class Problem:
     """Buffers of one problem structure ``(n, m_H, (m_1, ..., m_p))`` (see the module docstring).
 
@@ -70,6 +80,10 @@ class Problem:
         unit_weights: Every level row weight is 1.
         signs: ``(2, M)`` rows of +1 and -1 (``vdot(sides, signs) = sum(lo) - sum(hi)``).
         flags: Scratch booleans (M,) for checks.
+        box: ``sides[:, :n]``: the hard box as rows ``lower``, ``upper`` (a view).
+        level_sides: ``sides[:, a:b]`` of each level (views).
+        flat_rows: ``A[n:]`` flattened (a view: the hard and level rows in one vector).
+        squares: Scratch (M,) for squared slacks.
 
     Raises:
         InputError: a size that is not a non-negative integer, or a bad metric.
@@ -81,9 +95,12 @@ class Problem:
         "M",
         "W",
         "__weakref__",
+        "box",
         "flags",
+        "flat_rows",
         "head",
         "hi",
+        "level_sides",
         "lo",
         "mh",
         "n",
@@ -91,6 +108,7 @@ class Problem:
         "signs",
         "sizes",
         "spans",
+        "squares",
         "unit_weights",
         "w",
         "weights_version",
@@ -113,7 +131,11 @@ class Problem:
         if sides is None:
             sides = np.empty((2, M))
             sides[0], sides[1] = -np.inf, np.inf
+        if not A.flags.c_contiguous:  # read in place through flat views (checks, DAQP)
+            raise InputError("A: expected a C-contiguous array (the problem's own buffer)")
         self.A, self.sides = A, sides
+        self.box = sides[:, :n]
+        self.flat_rows = A[n:].reshape(-1)
         self.lo, self.hi = sides[0], sides[1]
         self.signs = np.ones((2, M))  # [+1; -1]: vdot(sides, signs) = sum(lo) - sum(hi)
         self.signs[1] = -1.0
@@ -121,6 +143,8 @@ class Problem:
         self.W = np.ones(n) if W is None else as_vector(W, "W", n, positive=True)
         ends = np.cumsum((self.head, *self.sizes)).tolist()
         self.spans = tuple(pairwise(ends))
+        self.level_sides = tuple(sides[:, a:b] for a, b in self.spans)
+        self.squares = np.empty(M)
         self.w = np.ones(ml) if w is None else w
         self.weights_version = 0
         self.G = np.zeros((1 + len(self.sizes), M))
@@ -157,19 +181,17 @@ class Problem:
 
     def scale(self, start: int, end: int) -> float:
         """``max(1, max |finite side|)`` over stacked rows ``start:end`` (relative tolerances)."""
-        lo, hi = self.sides[:, start:end].tolist()
-        values = lo + hi
-        if not values:
-            return 1.0
-        big = max(max(values), -min(values))
-        if big == math.inf:
-            big = max(map(abs, filter(math.isfinite, values)), default=0.0)
-        return big if big > 1.0 else 1.0
+        return scale_of(self.sides[:, start:end])
+
+    def level_scale(self, k: int) -> float:
+        """:meth:`scale` of the rows of level ``k``."""
+        return scale_of(self.level_sides[k])
 
     @property
     def hard_scale(self) -> float:
         """``max(1, max |finite bound or hard side|)``."""
         return self.scale(0, self.head)
+
 
     # ----------------------------------------------------------------------------- changes
     def set_weights(self, w: Any = None, rows: slice | None = None) -> None:

@@ -327,15 +327,15 @@ def finite_ok(problem: Problem) -> bool:
     """No NaN or inf in the rows, no NaN side, no lower side ``+inf``, no upper side ``-inf``.
 
     Two warning-free reductions: ``sum(lo) - sum(hi)`` is finite or ``-inf`` exactly when the
-    sides are legitimate (``+inf`` and ``-inf`` together give NaN), ``vdot(A, A)`` is finite
-    exactly when every row entry is; a finite overflow (entries beyond ~1e154) gives a false
-    alarm only, for the caller's detailed check to clear.
+    sides are legitimate (``+inf`` and ``-inf`` together give NaN), ``A . A`` over the rows is
+    finite exactly when every row entry is; a finite overflow (entries beyond ~1e154) gives a
+    false alarm only, for the caller's detailed check to clear.
     """
     v = float(np.vdot(problem.sides, problem.signs))
     if not (v == -math.inf or math.isfinite(v)):
         return False
-    rows = problem.A[problem.n:]
-    return not rows.size or math.isfinite(float(np.vdot(rows, rows)))
+    rows = problem.flat_rows
+    return math.isfinite(float(np.vdot(rows, rows)))
 
 
 def sides_and_rows_ok(problem: Problem) -> bool:

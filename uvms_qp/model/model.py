@@ -521,10 +521,16 @@ class Model:
         """
         q = self.check_configuration(q)
         step = as_scalar(dt, "dt")
-        out = np.asarray(pin.integrate(self.pin_model, q, self.velocity(zeta) * step))
-        # finite zeta and dt whose product overflows (the sum is the cheap test; an overflowing
-        # sum of finite entries is re-checked entry by entry)
-        if not math.isfinite(sum(out.tolist())) and not np.isfinite(out).all():
+        z = as_vector(zeta, "zeta", self.nv)
+        if self._select is None:  # every Pinocchio velocity is a rate of zeta
+            v = z * step
+        else:
+            v = np.zeros(self.pin_model.nv)
+            v[self._columns] = z * step
+        out = pin.integrate(self.pin_model, q, v)
+        # finite zeta and dt whose product overflows (the sum of squares is the cheap test; an
+        # overflowing sum of finite entries is re-checked entry by entry)
+        if not math.isfinite(float(np.vdot(out, out))) and not np.isfinite(out).all():
             raise NonFiniteError(f"integrate: zeta * dt overflows (max |zeta| "
                                  f"{np.abs(np.asarray(zeta, dtype=np.float64)).max():.3g}, "
                                  f"dt {step:g}): the configuration is not finite")

@@ -220,8 +220,10 @@ class State:
             except (KeyError, TypeError):
                 raise UnknownNameError("axis convention", axes, _AXES) from None
             model = self.model
-            J = pin.getFrameJacobian(model.pin_model, self._data, model.frame_id(frame),
-                                     reference)
+            fid = model._frame_ids.get(frame)
+            if fid is None:
+                raise UnknownFrameError(frame, model.frames)
+            J = pin.getFrameJacobian(model.pin_model, self._data, fid, reference)
             if model._select is not None:
                 J = J[:, model._select]
             J.setflags(write=False)

@@ -66,6 +66,7 @@ ZERO = "zero"
 HOLD_ZERO = "hold_zero"
 
 _OPTIMAL, _LEVEL_INFEASIBLE, _UNPROVEN = Status.OPTIMAL, Status.LEVEL_INFEASIBLE, Status.UNPROVEN
+_VALUES = {status: status.value for status in Status}  # without the enum's property per step
 
 #: Default cap of one solve of a solver stage [s] (no cascade solve past it at n <= 30).
 TIME_CAP = 0.05
@@ -301,7 +302,7 @@ class SafeSolver:
             self.previous = result.x
             self.consecutive = 0
             self.stage_counts[PRIMARY] += 1
-            self.status_counts[result.status.value] += 1
+            self.status_counts[_VALUES[result.status]] += 1
             elapsed = self._clock() - start
             return SafeSolve(result.x, result, PRIMARY, (), 0.0, False, elapsed > self._budget,
                              0, elapsed)
@@ -408,7 +409,7 @@ class SafeSolver:
         self.previous = x
         self.consecutive = 0
         self.stage_counts[stage] += 1
-        self.status_counts[result.status.value] += 1
+        self.status_counts[_VALUES[result.status]] += 1
         elapsed = self._clock() - start
         return SafeSolve(x, result, stage, tuple(attempts), clipped,
                          clipped > self.clip_flag_tol, elapsed > self._budget, dropped, elapsed)
@@ -430,7 +431,7 @@ class SafeSolver:
         self.previous = result.x
         self.consecutive += 1
         self.stage_counts[stage] += 1
-        self.status_counts[result.status.value] += 1
+        self.status_counts[_VALUES[result.status]] += 1
         elapsed = self._clock() - start
         return SafeSolve(result.x, result, stage, tuple(attempts), 0.0, False,
                          elapsed > self._budget, 0, elapsed)

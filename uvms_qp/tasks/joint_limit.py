@@ -180,11 +180,11 @@ class JointLimitTask(Task):
                 d = x - lo if x - lo < hi - x else hi - x
                 if d < distance:
                     distance = d
-            self.last_error = np.array((distance,))
+            self._error = (distance,)
             return self._A, lower, upper
         H, g = index_and_gradient(q, self._table)
         self.value = H
-        self.last_error = np.array((H,))
+        self._error = (H,)
         if self.mode == "damping":
             # a new array every tick: the controller refreshes weights it has not seen
             self.row_weights = np.array([self.weight * (1.0 + abs(x)) for x in g])

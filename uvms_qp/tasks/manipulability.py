@@ -343,7 +343,7 @@ class ManipulabilityTask(Task):
         """The rows of the selected mode (see the class docstring)."""
         w, g = self._value(state)
         self.value = w
-        self.last_error = np.array((w,))
+        self._error = (w,)
         if self.mode == "floor":
             return np.array([self._zeros + g]), self.gain * (self.minimum - w), np.inf  # type: ignore[operator]
         scale = self.gain

@@ -129,7 +129,7 @@ class PayloadMomentTask(Task):
         """The reduce rows or the bound row (see the class docstring)."""
         M, g = self._moment(state)
         self.value = M
-        self.last_error = np.array((M,))
+        self._error = (M,)
         if self.mode == "bound":
             return np.array([self._zeros + g]), -np.inf, self.gain * (self.maximum - M)  # type: ignore[operator]
         scale = -self.gain

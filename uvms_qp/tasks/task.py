@@ -17,7 +17,9 @@ evaluation:
   upper)``.
 
 The rest is defined once here: :meth:`Task.fill` writes the rows into caller-owned buffers (what
-the controller calls every tick), :meth:`Task.rows` returns fresh :class:`~uvms_qp.rows.Rows`,
+the controller calls every tick: ``A`` and the ``(2, dim)`` sides, in as few numpy calls as the
+rows allow; a ``J`` that does not change is returned as the same read-only array every time and
+written into a given buffer once), :meth:`Task.rows` returns fresh :class:`~uvms_qp.rows.Rows`,
 and ``compute_error`` / ``compute_jacobian`` / ``compute_feedforward`` are views of
 :meth:`ErrorTask.error_rows`.
 
@@ -120,7 +122,8 @@ class Task(ABC):
         model: The bound model, or None before :meth:`bind`.
         dim: Number of rows (known after :meth:`bind`).
         last_error: The task error (error tasks) or objective value at the last evaluation
-            [error_unit], a new array every evaluation; None before the first one.
+            [error_unit], a new array every evaluation; None before the first one. A task may
+            set it to a sequence of floats (e.g. ``(w,)``): it becomes an array when read.
         row_weights: Per-row weights (dim,), task weight included; a new array whenever they
             change (so a consumer re-reads them only then).
         activation: The activation in [0, 1] at the last evaluation (see the module
@@ -140,7 +143,8 @@ class Task(ABC):
         self.model: Model | None = None
         self.dim = 0
         self.row_weights: FloatArray = np.zeros(0)
-        self.last_error: FloatArray | None = None
+        self._error: Any = None  # last_error as set (a sequence becomes an array when read)
+        self._written: tuple[Any, Any] = (None, None)  # (buffer, J) of the latest fill
         self.activation = as_activation(activation, f"{self.name}.activation")
         self.ramp = DEFAULT_RAMP
         self._initial_activation = self.activation
@@ -161,6 +165,18 @@ class Task(ABC):
         if overridden:
             raise TypeError(f"{cls.__name__} overrides {', '.join(overridden)}: a task class "
                             "implements evaluate (or error_rows for an ErrorTask) only")
+
+    @property
+    def last_error(self) -> FloatArray | None:
+        """See the class attributes."""
+        e = self._error
+        if e is not None and type(e) is not np.ndarray:
+            e = self._error = np.array(e, dtype=np.float64)
+        return e
+
+    @last_error.setter
+    def last_error(self, value: Any) -> None:
+        self._error = value
 
     # ----------------------------------------------------------------------------------- binding
     def bind(self, model: Model) -> Task:
@@ -211,38 +227,41 @@ class Task(ABC):
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, Any, Any]:
         """The rows at ``(state, t)``: ``(J, lower, upper)``.
 
-        ``J`` is ``(dim, nv)``; ``lower`` and ``upper`` are ``(dim,)`` arrays or numbers (one
-        value for every row). The arrays may be read-only views of the state or of the task:
-        copy them before modifying. Sets :attr:`last_error`.
+        ``J`` is ``(dim, nv)``; ``lower`` and ``upper`` are ``(dim,)`` arrays, lists or numbers
+        (one value for every row), the same object for equality rows. The arrays may be
+        read-only views of the state or of the task: copy them before modifying; rows that do
+        not change are best returned as the same read-only array every time (:meth:`fill`
+        writes them once). Sets :attr:`last_error`.
         """
 
     @final
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write the rows at ``(state, t)`` into ``A`` (dim, nv), ``lower`` and ``upper`` (dim,).
+    def fill(self, state: State, t: float, A: FloatArray, sides: FloatArray) -> None:
+        """Write the rows at ``(state, t)`` into ``A`` (dim, nv) and ``sides`` (2, dim).
 
-        The buffers may hold stale values: every entry is written. Advances an activation
-        ramp to ``t``.
+        ``sides`` holds the lower sides, then the upper ones. The buffers may hold stale values:
+        every entry is written, except that ``A`` is not written again when it received this
+        very ``J`` array (read-only) at the previous fill. Advances an activation ramp to ``t``.
         """
         if self._ramping is not None:
             self.advance_activation(t)
         J, lo, hi = self.evaluate(state, t)
-        A[:] = J
-        lower[:] = lo
-        if hi is lo:  # equality rows
-            upper[:] = lower
+        if J is not self._written[1] or A is not self._written[0]:
+            A[...] = J
+            self._written = (A, J)
+        if hi is lo:  # equality rows: one write of both sides
+            sides[...] = lo
         else:
-            upper[:] = hi
+            sides[0] = lo
+            sides[1] = hi
 
     @final
     def rows(self, state: State, t: float = 0.0) -> Rows:
         """Rows ``lower <= A zeta <= upper`` at ``state`` and time ``t`` [s] (fresh arrays)."""
         model = self._require_bound()
         A = np.empty((self.dim, model.nv))
-        lower = np.empty(self.dim)
-        upper = np.empty(self.dim)
-        self.fill(state, t, A, lower, upper)
-        return Rows(A, lower, upper, self.row_weights.copy(), self.name)
+        sides = np.empty((2, self.dim))
+        self.fill(state, t, A, sides)
+        return Rows(A, sides[0], sides[1], self.row_weights.copy(), self.name)
 
     def residual(self, state: State, zeta: Any, t: float = 0.0) -> float:
         """Norm of the row violation at ``zeta`` [rate_unit]: distance of ``A zeta`` to its band."""
@@ -389,28 +408,28 @@ class ErrorTask(Task):
         """
 
     @final  # type: ignore[misc]  # the error tasks' one fill, final below ErrorTask
-    def fill(self, state: State, t: float, A: FloatArray, lower: FloatArray,
-             upper: FloatArray) -> None:
-        """Write ``J zeta = x_dot_d + K e`` (equality rows) into the buffers."""
+    def fill(self, state: State, t: float, A: FloatArray, sides: FloatArray) -> None:
+        """Write ``J zeta = x_dot_d + K e`` (equality rows) into ``A`` and ``sides`` (2, dim)."""
         if self._ramping is not None:
             self.advance_activation(t)
         J, e, ff = self.error_rows(state, t)
-        A[:] = J
-        np.multiply(e, self._gains, lower)
+        if J is not self._written[1] or A is not self._written[0]:
+            A[...] = J
+            self._written = (A, J)
+        side = e * self._gains
         if ff is not None:
-            lower += ff
-        upper[:] = lower
-        self.last_error = e
+            side += ff
+        sides[...] = side  # both sides at once
+        self._error = e
 
     @final
     def evaluate(self, state: State, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``(J, lower, upper)`` with ``lower = upper = x_dot_d + K e`` (fresh arrays)."""
         model = self._require_bound()
         A = np.empty((self.dim, model.nv))
-        lower = np.empty(self.dim)
-        upper = np.empty(self.dim)
-        self.fill(state, t, A, lower, upper)
-        return A, lower, upper
+        sides = np.empty((2, self.dim))
+        self.fill(state, t, A, sides)
+        return A, sides[0], sides[1]
 
     @final
     def compute_error(self, state: State, t: float) -> FloatArray:

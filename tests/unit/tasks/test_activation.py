@@ -24,8 +24,7 @@ def rov():
 
 def _fill(task, state, t):
     A = np.empty((task.dim, task.model.nv))
-    lo, hi = np.empty(task.dim), np.empty(task.dim)
-    task.fill(state, t, A, lo, hi)
+    task.fill(state, t, A, np.empty((2, task.dim)))
 
 
 def test_activation_ramps_with_a_smoothstep(rov):

@@ -63,6 +63,7 @@ DAQP_SETTINGS = frozenset((
     "abs_subopt", "sing_tol", "refactor_tol", "time_limit", "eq_reduction", "presolve",
 ))
 
+_square, _level_max = np.square, np.maximum.reduceat
 _SOLVED = (1, 2)
 _OPTIMAL = Status.OPTIMAL
 _STOP = (-1, -7)  # empty hard set, time limit: another rho_soft cannot help
@@ -171,7 +172,7 @@ class _Setup:
         product for all rows.
         """
         problem = self.problem
-        q = np.square(self.levels, out=self.squares).dot(self.inv_W)  # |a_i W^(-1/2)|^2
+        q = _square(self.levels, out=self.squares).dot(self.inv_W)  # |a_i W^(-1/2)|^2
         if not problem.unit_weights:
             q *= problem.w
         if problem.weights_version != self.version:
@@ -184,7 +185,7 @@ class _Setup:
             scatter[np.arange(q.shape[0]), np.repeat(np.arange(len(sizes)), sizes)] = (
                 rho_soft / problem.w)
             self.scatter[rho_soft] = scatter
-        scatter.dot(np.maximum.reduceat(q, self.starts), out=out)
+        scatter.dot(_level_max(q, self.starts), out=out)
 
     def load(self, rho_soft: float) -> None:
         """Hand this solve's rows, sides and soft weights to DAQP (warm start kept)."""
@@ -197,7 +198,7 @@ class _Setup:
         elif views is not None:
             lower, upper = views
             self.level_weights(rho_soft, lower)
-            np.copyto(upper, lower)
+            upper[...] = lower
             self.binding.refresh()
         else:
             self.binding.refresh()

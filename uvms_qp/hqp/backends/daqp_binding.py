@@ -270,6 +270,8 @@ class NativeDaqp:
         self._res = _Result()
         self._res_ref = C.byref(self._res)
         self._mask = C.c_int(UPDATE_M | UPDATE_D | UPDATE_SENSE)
+        self._update = self._lib.daqp_update_ldp
+        self._solve = self._lib.daqp_solve
         self.solve_time = 0.0
         self.iterations = 0
 
@@ -368,7 +370,7 @@ class NativeDaqp:
 
     def refresh(self) -> int:
         """Hand the set-up arrays (rows, sides, weights written in place) to DAQP."""
-        return int(self._lib.daqp_update_ldp(self._mask, self._work, self._qp_ref))
+        return self._update(self._mask, self._work, self._qp_ref)  # an int (restype)
 
     def restart(self, sense: np.ndarray) -> int:
         """Cold start: the next solve starts from the working set ``sense``."""
@@ -380,13 +382,13 @@ class NativeDaqp:
     def solve(self) -> int:
         """Solve; returns DAQP's exit flag and sets ``x`` (a reused buffer), time, iterations."""
         res = self._res
-        self._lib.daqp_solve(self._res_ref, self._work)
+        self._solve(self._res_ref, self._work)
         if not self._warm:  # later refreshes keep the working set of this solve
             self._qp.sense = self._view.sense
             self._warm = True
         self.solve_time = res.solve_time
         self.iterations = res.iter
-        return int(res.exitflag)
+        return res.exitflag  # an int (ctypes field)
 
     def solve_cold(self, rows: bool) -> int:
         """Re-read ``f``, the sides (and rows), solve from an empty working set; ``lam`` is set."""
