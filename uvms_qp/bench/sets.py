@@ -186,16 +186,25 @@ def raw_set(config: SetConfig, seed: int) -> list[BenchProblem]:
 # --------------------------------------------------------------------------------- random UVMS
 
 
-def random_dh_model(rng: np.random.Generator, name: str) -> Any:
+def random_dh_model(rng: np.random.Generator, name: str, *, planar: bool | None = None,
+                    n_joints: int | None = None) -> Any:
     """A random UVMS: planar or spatial vehicle and a 3-7 joint revolute arm from a DH table.
 
     Link lengths ``a`` in [0, 0.4] m, offsets ``d`` in [0, 0.2] m, twists from
     ``{0, +/-pi/2}`` (planar vehicles: all 0, so the arm moves in the plane), joint limits
     ``+/-`` 1-3 rad, joint rate limits 0.5-2 rad/s. Spatial vehicles actuate all six DOFs or
     the 4-DOF ROV set ``u, v, w, r``.
+
+    Args:
+        rng: Random generator (consumed).
+        name: The model's name.
+        planar: Planar (True) or spatial (False) vehicle; drawn (35 % planar) when None.
+        n_joints: Number of arm joints; drawn from 3-7 when None.
     """
-    planar = bool(rng.uniform() < 0.35)
-    n_joints = int(rng.integers(3, 8))
+    if planar is None:
+        planar = bool(rng.uniform() < 0.35)
+    if n_joints is None:
+        n_joints = int(rng.integers(3, 8))
     rows = []
     for _ in range(n_joints):
         alpha = 0.0 if planar else float(rng.choice([0.0, math.pi / 2, -math.pi / 2]))
