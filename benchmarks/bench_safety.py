@@ -6,7 +6,9 @@ stepped along the states of a clean closed-loop run of the same controller; duri
 every call of the primary back-end (or of DAQP's binding) fails in one way
 (:class:`uvms_qp.testing.faults.Fault`); afterwards it behaves. Printed per path and fault: the
 stage and status of the faulted step, whether its command is finite and inside the box with
-the hard rows held (``safe``), and ``recovery``: the number of steps after the fault until the
+the hard rows held (``safe``), whether it equals the clean run's command to 1e-7
+(``clean``: an answer repaired or replaced by the ladder, not a wrong one believed), and
+``recovery``: the number of steps after the fault until the
 stage is ``primary`` again with the clean command (to 1e-7). A second table takes every
 back-end down (primary and alternate raise) for six steps: the stages the ladder walks through,
 and the recovery once the back-ends answer again.
@@ -63,10 +65,8 @@ def _controller(model: Any, path: dict[str, Any], clock: Clock | None = None) ->
     return ctrl
 
 
-def run(path_name: str, fault: Fault, steps: int, at: int,
-        uncertified: bool = False) -> tuple[str, str, bool, str]:
-    model = load_model("bluerov2_heavy_alpha5")
-    path = PATHS[path_name]
+def _clean_run(model: Any, path: dict[str, Any], steps: int) -> tuple[list[Any], list[Any]]:
+    """The configurations and commands of ``steps`` unfaulted closed-loop steps from home."""
     clean = _controller(model, path)
     q = model.home()
     states, zetas = [], []
@@ -75,6 +75,14 @@ def run(path_name: str, fault: Fault, steps: int, at: int,
         res = clean.step(model.state(q), 0.05 * k)
         zetas.append(res.zeta)
         q = model.integrate(q, res.zeta, 0.05)
+    return states, zetas
+
+
+def run(path_name: str, fault: Fault, steps: int, at: int,
+        uncertified: bool = False) -> tuple[str, str, bool, bool, str]:
+    model = load_model("bluerov2_heavy_alpha5")
+    path = PATHS[path_name]
+    states, zetas = _clean_run(model, path, steps)
     clock = Clock()
     ctrl = _controller(model, path, clock)
     if uncertified:
@@ -95,21 +103,15 @@ def run(path_name: str, fault: Fault, steps: int, at: int,
     safe = bool(np.all(np.isfinite(faulted.zeta)) and np.all(faulted.zeta >= faulted.lower)
                 and np.all(faulted.zeta <= faulted.upper) and faulted.bound_violation <= 1e-9)
     stage = faulted.stage + (" (late)" if faulted.deadline_missed else "")
-    return stage, faulted.status.value, safe, recovery
+    clean_command = bool(np.max(np.abs(faulted.zeta - zetas[at])) <= 1e-7)
+    return stage, faulted.status.value, safe, clean_command, recovery
 
 
 def all_down(path_name: str, steps: int, at: int, down: int = 6) -> tuple[list[str], str]:
     """Stages of steps ``at .. at + down`` with every back-end raising, and the recovery."""
     model = load_model("bluerov2_heavy_alpha5")
     path = PATHS[path_name]
-    clean = _controller(model, path)
-    q = model.home()
-    states, zetas = [], []
-    for k in range(steps):
-        states.append(q)
-        res = clean.step(model.state(q), 0.05 * k)
-        zetas.append(res.zeta)
-        q = model.integrate(q, res.zeta, 0.05)
+    states, zetas = _clean_run(model, path, steps)
     ctrl = _controller(model, path)
     injectors = [inject(ctrl, Fault.RAISE_FOREIGN, at=path.get("at", "backend"))]
     if ctrl.safe.alternate is not None:
@@ -133,18 +135,20 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=30)
     parser.add_argument("--at", type=int, default=12, help="faulted step")
     args = parser.parse_args()
-    print(f"{'path':<26} {'fault':<16} {'stage':<22} {'status':<17} {'safe':<5} recovery")
+    print(f"{'path':<26} {'fault':<16} {'stage':<22} {'status':<17} {'safe':<5} {'clean':<6} "
+          "recovery")
     for path_name in PATHS:
         for fault in Fault:
-            stage, status, safe, recovery = run(path_name, fault, args.steps, args.at)
+            stage, status, safe, right, recovery = run(path_name, fault, args.steps,
+                                                       args.at)
             print(f"{path_name:<26} {fault.value:<16} {stage:<22} {status:<17} "
-                  f"{'yes' if safe else 'NO':<5} {recovery}")
+                  f"{'yes' if safe else 'NO':<5} {'yes' if right else 'no':<6} {recovery}")
     print("\nwith the optimality certificate switched off (certify = None):")
     for path_name in PATHS:
-        stage, status, safe, recovery = run(path_name, Fault.FEASIBLE_WRONG, args.steps,
-                                            args.at, uncertified=True)
+        stage, status, safe, right, recovery = run(path_name, Fault.FEASIBLE_WRONG, args.steps,
+                                                   args.at, uncertified=True)
         print(f"{path_name:<26} {'feasible_wrong':<16} {stage:<22} {status:<17} "
-              f"{'yes' if safe else 'NO':<5} {recovery}")
+              f"{'yes' if safe else 'NO':<5} {'yes' if right else 'no':<6} {recovery}")
     print(f"\nevery back-end down for 6 steps (from step {args.at}):")
     for path_name in PATHS:
         stages, recovery = all_down(path_name, args.steps, args.at)
