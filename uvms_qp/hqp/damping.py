@@ -62,6 +62,7 @@ of the user's problem: a certificate of the user's problem does not apply to it 
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -73,6 +74,12 @@ from .problem import Problem
 
 _GESDD = lapack.dgesdd
 _POTRF = lapack.dpotrf
+_absolute, _add, _divide, _dot, _sqrt, _subtract = (
+    np.absolute, np.add, np.divide, np.dot, np.sqrt, np.subtract)
+_greater_equal, _less_equal, _logical_or = np.greater_equal, np.less_equal, np.logical_or
+_maximum, _minimum = np.maximum, np.minimum
+#: Sets of active rows whose screen structure a problem keeps (the last few).
+_KEEP = 8
 
 #: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
 #: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
@@ -116,6 +123,10 @@ class Damping:
         return tuple(k for k, r in enumerate(self.rows) if r is not None)
 
 
+#: Per problem (while it lives), what :func:`level_damping` keeps between calls.
+_SETUPS: weakref.WeakKeyDictionary[Problem, _Setup] = weakref.WeakKeyDictionary()
+
+
 def _svd(M: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``U`` (m, m), singular values (descending) and ``V'`` (c, c) of ``M`` (m, c)."""
     u, s, vt, info = _GESDD(M, compute_uv=1, full_matrices=1)
@@ -131,7 +142,9 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     See the module docstring. The problem's metric ``W``, row weights, hard rows and sides are
     read from its buffers. A screen first bounds every level's singular values from below by
     those of the stacked active rows (:func:`_screen`); only when that cannot prove that no
-    direction is weak are the levels examined one by one.
+    direction is weak are the levels examined one by one. What does not change between calls
+    (the level rows' views, ``W^(1/2)``, the thresholds, and per set of active rows the indices
+    and buffers of the screen) is kept for the problem while it lives.
 
     Args:
         problem: The problem (its box is not used).
@@ -143,26 +156,41 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         The damping rows and the smallest singular value of each level (a lower bound on it
         when the screen proves that no level needs damping).
     """
-    p = len(problem.spans)
-    last = max((k for k, e in enumerate(thresholds) if e > 0.0), default=-1)
-    if last < 0:
-        return Damping((None,) * p, (math.nan,) * p)
-    head, end = problem.head, problem.spans[last][1]
-    A, lo, hi = problem.A[head:end], problem.lo[head:end], problem.hi[head:end]
-    z = A @ x
-    clipped = np.minimum(np.maximum(z, lo), hi)
-    slack = z - clipped  # what each row misses
-    tol = ACTIVE_RTOL * max(1.0, float(np.abs(z).max()))
+    setup = _SETUPS.get(problem)
+    if (setup is None or setup.W is not problem.W or setup.dt != dt
+            or (setup.thresholds is not thresholds
+                and setup.thresholds != tuple(thresholds))):
+        setup = _SETUPS[problem] = _Setup(problem, thresholds, dt)
+    if setup.last < 0:
+        return setup.undamped
+    z = setup.A.dot(x)
+    B = setup.B  # [z - lo; z - hi]
+    _subtract(z, setup.sides, out=B)
+    tol = ACTIVE_RTOL * max(1.0, float(_absolute(z, out=z).max()))
     # active: at or beyond a side (an equality row always; an infinite side never)
-    active = (clipped - lo <= tol) | (hi - clipped <= tol)
-    root = np.sqrt(problem.W)
+    active = _less_equal(setup.below, tol, out=setup.active)
+    _logical_or(active, _greater_equal(setup.above, -tol, out=setup.scratch), out=active)
+    root = setup.root
     hard = _active_hard(problem, x, root) if problem.mh else None
-    eps = [float(e) for e in thresholds[:last + 1]]
-    spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+    mh = 0 if hard is None else hard.shape[0]
+    key = active.tobytes()
+    shape = setup.shapes.get(key if hard is None else (key, mh))
+    if shape is None:
+        shape = setup.shape(active, mh)
     y_norm = math.sqrt(float(x.dot(problem.W * x)))
-    bounds = _screen(A, root, active, lo, hi, slack, hard, spans, eps, dt, y_norm)
+    bounds = _screen(setup, shape, hard, y_norm)
     if bounds is not None:
-        return Damping((None,) * p, (*bounds, *(math.nan,) * (p - last - 1)))
+        return Damping(setup.nones, (*bounds, *setup.tail))
+    # what each row misses, z - clip(z, lo, hi): z - lo below lo, z - hi above hi
+    slack = _add(_minimum(setup.below, 0.0), _maximum(setup.above, 0.0))
+    return _examine(problem, setup, x, active, slack, hard, y_norm)
+
+
+def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
+             slack: FloatArray, hard: FloatArray | None, y_norm: float) -> Damping:
+    """The levels examined one by one (the screen could not prove that none needs damping)."""
+    p, last, eps, dt, root = len(problem.spans), setup.last, setup.eps, setup.dt, setup.root
+    A, lo, hi = setup.A, setup.sides[0], setup.sides[1]
     eq = lo == hi
     demanding = active & (eq | (lo > 0.0) | (hi < 0.0))  # a side that excludes zero
     y = x * root
@@ -171,11 +199,11 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     norms[norms == 0.0] = 1.0
     unit = scaled / norms[:, None]  # unit rows: the row weights and units drop out
     slack = slack / norms  # what each row misses (normalised)
-    weighted = norms * np.sqrt(problem.w[:end - head])  # the weighted rows' own scale
+    weighted = norms * np.sqrt(problem.w[:setup.end - setup.head])  # the rows' own scale
     Z = None if hard is None else _null(hard)  # None: all the freedom
     rows: list[FloatArray | None] = [None] * p
     sigmas = [math.nan] * p
-    for k, (a, b) in enumerate(spans):
+    for k, (a, b) in enumerate(setup.spans):
         act, dem = active[a:b], demanding[a:b]
         if not act.any() or (Z is not None and Z.shape[1] == 0):
             sigmas[k] = math.inf
@@ -255,10 +283,97 @@ def _above(G: FloatArray, floor2: FloatArray | float) -> bool:
     return bool(_POTRF(G, lower=0, clean=0, overwrite_a=1)[1] == 0)
 
 
-def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, lo: FloatArray,
-            hi: FloatArray, slack: FloatArray, hard: FloatArray | None,
-            spans: Sequence[tuple[int, int]], eps: Sequence[float], dt: float,
-            y_norm: float) -> list[float] | None:
+class _Setup:
+    """What :func:`level_damping` reads of one problem for given thresholds.
+
+    Views of the level rows and sides down to the last level with a threshold, ``W^(1/2)``,
+    the thresholds as floats, buffers, and the screen's structure per set of active rows
+    (:class:`_Active`, the last few).
+    """
+
+    __slots__ = ("A", "B", "W", "above", "active", "below", "dt", "end", "eps", "head", "last",
+                 "n", "nones", "root", "scratch", "shapes", "sides", "spans", "tail",
+                 "thresholds", "undamped")
+
+    def __init__(self, problem: Problem, thresholds: Sequence[float], dt: float) -> None:
+        p = len(problem.spans)
+        self.W, self.dt, self.n = problem.W, dt, problem.n
+        self.thresholds = tuple(thresholds)
+        self.last = last = max((k for k, e in enumerate(self.thresholds) if e > 0.0),
+                               default=-1)
+        self.nones = (None,) * p
+        self.undamped = Damping(self.nones, (math.nan,) * p)
+        self.tail = (math.nan,) * (p - last - 1)
+        self.head = head = problem.head
+        self.end = end = problem.spans[last][1] if last >= 0 else head
+        self.A = problem.A[head:end]
+        self.sides = problem.sides[:, head:end]
+        self.root = np.sqrt(problem.W)
+        self.eps = [float(e) for e in self.thresholds[:last + 1]]
+        self.spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+        self.B = np.empty((2, end - head))
+        self.below, self.above = self.B  # z - lo, z - hi
+        self.active = np.empty(end - head, dtype=bool)
+        self.scratch = np.empty(end - head, dtype=bool)
+        self.shapes: dict[object, _Active] = {}
+
+    def shape(self, active: np.ndarray, mh: int) -> _Active:
+        """The screen's structure for the active rows ``active`` and ``mh`` active hard rows."""
+        if len(self.shapes) >= _KEEP:
+            self.shapes.clear()
+        key = active.tobytes()
+        shape = self.shapes[key if not mh else (key, mh)] = _Active(self, active, mh)
+        return shape
+
+
+class _Active:
+    """The screen's structure for one set of active rows (see :func:`_screen`).
+
+    Which rows it stacks, which levels each test covers, and its buffers.
+    """
+
+    __slots__ = ("counts", "diag", "fit", "fit_active", "fit_sides", "floored", "gram", "idx",
+                 "lead", "lead_diag", "levels", "mh", "mine", "norms", "rows", "tall",
+                 "tall_diag", "unit", "used")
+
+    def __init__(self, setup: _Setup, active: np.ndarray, mh: int) -> None:
+        n, spans, eps = setup.n, setup.spans, setup.eps
+        p = len(spans)
+        act = active.tolist()
+        self.mh = mh
+        self.counts = counts = [sum(act[a:b]) for a, b in spans]  # active rows per level
+        fit, used = 0, mh  # the levels whose active rows, with those above, fit in n rows
+        while fit < p and used + counts[fit] <= n:
+            used += counts[fit]
+            fit += 1
+        self.fit, self.used = fit, used
+        # down to the level that overflows, if one does
+        self.idx = np.flatnonzero(active[:spans[min(fit, p - 1)][1]])
+        k = mh + self.idx.size
+        self.rows = np.empty((k, n))  # the active hard rows, then the level rows picked
+        self.mine = self.rows[mh:]
+        self.gram = np.empty((k, k))
+        self.diag = self.gram.reshape(-1)[::k + 1]
+        self.lead = self.gram[:used, :used]
+        self.lead_diag = self.diag[:used]
+        self.norms = np.empty(k)
+        self.unit = np.empty((k, n))
+        self.tall = np.empty((n, n))
+        self.tall_diag = self.tall.reshape(-1)[::n + 1]
+        levels, start = [], mh  # (level, first row in the stack, active rows)
+        for j in range(min(fit + 1, p)):
+            levels.append((j, start, counts[j]))
+            start += counts[j]
+        self.levels = levels
+        self.floored = [j for j in range(fit) if counts[j] and eps[j] > 0.0]
+        if fit < p:
+            a, b = spans[fit]
+            self.fit_sides = (setup.sides[0, a:b], setup.sides[1, a:b])
+            self.fit_active = act[a:b]
+
+
+def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: float
+            ) -> list[float] | None:
     """Lower bounds on each level's singular values when they prove that no level needs damping.
 
     The singular values of a level's rows in the freedom ``Z`` the rows above it leave are
@@ -275,16 +390,10 @@ def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, lo: FloatArray,
     direction of every level it covers (:func:`_needed`, with the level's slack).
 
     Args:
-        A: Level rows (m, n) of the levels ``0..last`` (not normalised).
-        root: ``W^(1/2)`` (n,).
-        active: Per row, active at the undamped answer.
-        lo: Lower sides (m,).
-        hi: Upper sides (m,).
-        slack: Per row, what it misses (in the row's own units).
+        setup: The problem's views, thresholds and buffers.
+        shape: The structure of this set of active rows (``setup.active``); ``setup.below``
+            and ``setup.above`` hold ``z - lo`` and ``z - hi`` of the level rows.
         hard: The active hard rows (unit, over ``y``), or None.
-        spans: ``(start, end)`` of each level's rows in ``A``.
-        eps: Threshold per level.
-        dt: Control period [s].
         y_norm: ``|W^(1/2) x|``.
 
     Returns:
@@ -292,59 +401,64 @@ def _screen(A: FloatArray, root: FloatArray, active: np.ndarray, lo: FloatArray,
         without active rows in the freedom left), or None when the tests cannot prove that no
         level needs damping.
     """
-    n, p = A.shape[1], len(spans)
-    act = active.tolist()
-    mh = 0 if hard is None else hard.shape[0]
-    counts = [sum(act[a:b]) for a, b in spans]  # active rows per level
-    fit, used = 0, mh  # the levels whose active rows, with those above, fit in n rows
-    while fit < p and used + counts[fit] <= n:
-        used += counts[fit]
-        fit += 1
-    last = spans[min(fit, p - 1)][1]  # down to the level that overflows, if one does
-    picked = np.flatnonzero(active[:last])
-    scaled = A[picked] / root  # rows over y
+    n, p, mh = setup.n, len(setup.spans), shape.mh
+    rows, mine, gram = shape.rows, shape.mine, shape.gram
     if mh:
-        scaled = np.vstack((hard, scaled))
-    gram = scaled.dot(scaled.T)
-    squares = gram.diagonal().tolist()  # squared row norms
+        rows[:mh] = hard
+    setup.A.take(shape.idx, 0, out=mine)
+    _divide(mine, setup.root, out=mine)  # rows over y
+    if gram.size:
+        _dot(rows, rows.T, out=gram)
+    squares = shape.diag.tolist()  # squared row norms
     if min(squares, default=1.0) <= 0.0:
         return None  # a zero active row
-    missed = slack[picked].tolist()
-    floors, start = [], mh  # the least value each level's directions may have
-    for k in range(min(fit + 1, p)):
-        c = counts[k]
+    below, above = setup.B.take(shape.idx, 1).tolist()  # z - lo, z - hi of the rows picked
+    # what each row misses: z - lo below lo, z - hi above hi
+    missed = [v if v < 0.0 else w if w > 0.0 else 0.0 for v, w in
+              zip(below, above, strict=True)]
+    eps, dt = setup.eps, setup.dt
+    floors = []  # the least value each level's directions may have
+    for k, start, c in shape.levels:
         if eps[k] > 0.0 and c:
             own = math.sqrt(sum(v * v / q for v, q in zip(
                 missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
             floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
         else:
             floors.append(SCREEN_RANK)
-        start += c
-    bounds = [math.inf] * p
+    fit, used = shape.fit, shape.used
+    overflow = fit < p and used < n  # a level overflows the freedom the ones above leave
+    if overflow:  # its test takes the unit rows, before the leading block is shifted
+        unit = _divide(rows, _sqrt(shape.diag, out=shape.norms)[:, None], out=shape.unit)
     floor = max(floors[:fit], default=SCREEN_RANK)
-    if used and not _above(gram[:used, :used].copy(), floor * floor * gram.diagonal()[:used]):
-        return None
-    for k in range(fit):
-        if counts[k] and eps[k] > 0.0:
-            bounds[k] = floor
-    if fit == p or used >= n:
+    if used:  # the leading block minus floor^2 times its row norms squared
+        lead = shape.lead_diag
+        _subtract(lead, floor * floor * lead, out=lead)
+        if _POTRF(shape.lead, 0, 0, 0)[1] != 0:
+            return None
+    bounds = [math.inf] * p
+    for k in shape.floored:
+        bounds[k] = floor
+    if not overflow:  # every level fits, or no freedom below
         return bounds
-    a, b = spans[fit]  # the level whose rows overflow the freedom left
     need = floors[fit]
-    unit = scaled / np.sqrt(gram.diagonal())[:, None]
-    if not _above(unit.T.dot(unit), need * need):  # rank n: no freedom below
+    tall = _dot(unit.T, unit, out=shape.tall)
+    shape.tall_diag -= need * need
+    if _POTRF(tall.T, 0, 0, 1)[1] != 0:  # rank n: no freedom below
         return None
     if eps[fit] > 0.0:
-        asks = [low == high or low > 0.0 or high < 0.0 for low, high, on in
-                zip(lo[a:b].tolist(), hi[a:b].tolist(), act[a:b], strict=True) if on]
-        if not all(asks):  # fewer rows ask for motion: test them with the rows above
-            if not any(asks):
-                need = math.inf
-            else:
-                rows = unit[np.flatnonzero([True] * used + asks)]
-                G = rows.dot(rows.T) if rows.shape[0] <= n else rows.T.dot(rows)
-                if not _above(G, need * need):
-                    return None
+        low, high = shape.fit_sides
+        if low.tobytes() != high.tobytes():  # not every row an equality: which ask for motion
+            asks = [lo == hi or lo > 0.0 or hi < 0.0 for lo, hi, on in
+                    zip(low.tolist(), high.tolist(), shape.fit_active, strict=True) if on]
+            if not all(asks):  # fewer rows ask for motion: test them with the rows above
+                if not any(asks):
+                    need = math.inf
+                else:
+                    picked = unit[np.flatnonzero([True] * used + asks)]
+                    G = (picked.dot(picked.T) if picked.shape[0] <= n
+                         else picked.T.dot(picked))
+                    if not _above(G, need * need):
+                        return None
         bounds[fit] = need
     return bounds
 
