@@ -78,6 +78,7 @@ _absolute, _add, _divide, _dot, _sqrt, _subtract = (
     np.absolute, np.add, np.divide, np.dot, np.sqrt, np.subtract)
 _greater_equal, _less_equal, _logical_or = np.greater_equal, np.less_equal, np.logical_or
 _maximum, _minimum = np.maximum, np.minimum
+_max = np.maximum.reduce
 #: Sets of active rows whose screen structure a problem keeps (the last few).
 _KEEP = 8
 
@@ -166,7 +167,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     z = setup.A.dot(x)
     B = setup.B  # [z - lo; z - hi]
     _subtract(z, setup.sides, out=B)
-    tol = ACTIVE_RTOL * max(1.0, float(_absolute(z, out=z).max()))
+    tol = ACTIVE_RTOL * max(1.0, float(_max(_absolute(z, out=z))))
     # active: at or beyond a side (an equality row always; an infinite side never)
     active = _less_equal(setup.below, tol, out=setup.active)
     _logical_or(active, _greater_equal(setup.above, -tol, out=setup.scratch), out=active)
@@ -177,7 +178,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     shape = setup.shapes.get(key if hard is None else (key, mh))
     if shape is None:
         shape = setup.shape(active, mh)
-    y_norm = math.sqrt(float(x.dot(problem.W * x)))
+    y_norm = math.sqrt(float(x.dot(setup.W * x)))
     bounds = _screen(setup, shape, hard, y_norm)
     if bounds is not None:
         return Damping(setup.nones, (*bounds, *setup.tail))
@@ -332,9 +333,9 @@ class _Active:
     Which rows it stacks, which levels each test covers, and its buffers.
     """
 
-    __slots__ = ("counts", "diag", "fit", "fit_active", "fit_sides", "floored", "gram", "idx",
-                 "lead", "lead_diag", "levels", "mh", "mine", "norms", "rows", "tall",
-                 "tall_diag", "unit", "used")
+    __slots__ = ("both", "column", "counts", "diag", "fit", "fit_active", "fit_sides", "floored",
+                 "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "norms", "rows",
+                 "tall", "tall_diag", "unit", "used")
 
     def __init__(self, setup: _Setup, active: np.ndarray, mh: int) -> None:
         n, spans, eps = setup.n, setup.spans, setup.eps
@@ -349,6 +350,7 @@ class _Active:
         self.fit, self.used = fit, used
         # down to the level that overflows, if one does
         self.idx = np.flatnonzero(active[:spans[min(fit, p - 1)][1]])
+        self.both = np.concatenate((self.idx, self.idx + active.size))  # in [z - lo; z - hi]
         k = mh + self.idx.size
         self.rows = np.empty((k, n))  # the active hard rows, then the level rows picked
         self.mine = self.rows[mh:]
@@ -357,6 +359,7 @@ class _Active:
         self.lead = self.gram[:used, :used]
         self.lead_diag = self.diag[:used]
         self.norms = np.empty(k)
+        self.column = self.norms[:, None]
         self.unit = np.empty((k, n))
         self.tall = np.empty((n, n))
         self.tall_diag = self.tall.reshape(-1)[::n + 1]
@@ -412,23 +415,27 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     squares = shape.diag.tolist()  # squared row norms
     if min(squares, default=1.0) <= 0.0:
         return None  # a zero active row
-    below, above = setup.B.take(shape.idx, 1).tolist()  # z - lo, z - hi of the rows picked
+    values = setup.B.take(shape.both).tolist()  # z - lo, then z - hi, of the rows picked
     # what each row misses: z - lo below lo, z - hi above hi
+    k = len(values) // 2
     missed = [v if v < 0.0 else w if w > 0.0 else 0.0 for v, w in
-              zip(below, above, strict=True)]
+              zip(values[:k], values[k:], strict=True)]
     eps, dt = setup.eps, setup.dt
-    floors = []  # the least value each level's directions may have
+    t = dt * y_norm
+    floors = []  # the least value each level's directions may have (see _needed)
     for k, start, c in shape.levels:
         if eps[k] > 0.0 and c:
             own = math.sqrt(sum(v * v / q for v, q in zip(
                 missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
-            floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
+            floors.append(max(SCREEN_RANK, eps[k],
+                              0.5 * (t + math.sqrt(t * t + 4.0 * dt * own))))
         else:
             floors.append(SCREEN_RANK)
     fit, used = shape.fit, shape.used
     overflow = fit < p and used < n  # a level overflows the freedom the ones above leave
     if overflow:  # its test takes the unit rows, before the leading block is shifted
-        unit = _divide(rows, _sqrt(shape.diag, out=shape.norms)[:, None], out=shape.unit)
+        _sqrt(shape.diag, out=shape.norms)
+        unit = _divide(rows, shape.column, out=shape.unit)
     floor = max(floors[:fit], default=SCREEN_RANK)
     if used:  # the leading block minus floor^2 times its row norms squared
         lead = shape.lead_diag
