@@ -52,7 +52,11 @@ freedom: near a singularity, such a lower level can change how a higher one is d
 Cost: a screen first tests all the levels at once against lower bounds on their singular values
 (one or two Cholesky factorisations of Gram matrices of the stacked unit active rows, see
 :func:`_screen`). Away from singularities it proves that no direction is weak and nothing else is
-computed; otherwise the levels are examined one by one as above.
+computed; otherwise the levels are examined one by one as above. What does not change between
+calls (views of the level rows and sides, ``W^(1/2)``, the thresholds, and per set of active rows
+the indices of the rows stacked and the buffers of the Gram matrices) is kept per problem, so a
+call that the screen settles is about twenty numpy and LAPACK calls: on the demo stack (4 levels,
+33 rows, 10 variables) about 160 k instructions, a third of them deciding the active rows.
 
 A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
 of the user's problem: a certificate of the user's problem does not apply to it (see
@@ -175,7 +179,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     hard = _active_hard(problem, x, root) if problem.mh else None
     mh = 0 if hard is None else hard.shape[0]
     key = active.tobytes()
-    shape = setup.shapes.get(key if hard is None else (key, mh))
+    shape = setup.shapes.get(key if not mh else (key, mh))
     if shape is None:
         shape = setup.shape(active, mh)
     y_norm = math.sqrt(float(x.dot(setup.W * x)))

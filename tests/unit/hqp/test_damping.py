@@ -333,3 +333,33 @@ def test_rank_deficient_hard_rows_leave_the_levels_their_freedom():
     assert damping.damped_levels == (0,)
     expected = _oracle(blocks, x, [EPS], np.ones(n), 0.0, hard)[0]
     assert np.allclose(damping.rows[0].T @ damping.rows[0], expected)
+
+
+def test_what_a_problem_keeps_between_calls_follows_its_rows_sides_and_metric():
+    """The views, buffers and per-active-set structure kept for a problem give, call after call
+    with new rows, sides (active sets that change), hard rows, thresholds and metric, what a
+    fresh copy of the problem gives."""
+    rng = np.random.default_rng(7)
+    n, sizes = 7, [2, 2, 5]
+    blocks = [(rng.normal(size=(m, n)), -np.ones(m), np.ones(m)) for m in sizes]
+    hard = (rng.normal(size=(2, n)), -np.ones(2), np.ones(2))
+    problem = normalize_problem([[b] for b in blocks], hard=[hard])
+    rows, head = problem.A[n:], problem.head
+    for step in range(60):
+        rows[...] = rng.normal(size=rows.shape)
+        if step % 3 == 0:  # a nearly dependent row: the screen cannot settle it
+            rows[-1] = rows[-2] + 1e-3 * rng.normal(size=n)
+        x = rng.normal(size=n)
+        z = problem.A @ x
+        gap = rng.choice([0.0, 1e-9, 0.5, 0.5, np.inf], size=(2, problem.M - n))
+        problem.lo[n:], problem.hi[n:] = z[n:] - gap[0], z[n:] + gap[1]
+        equality = rng.random(problem.M - head) < 0.5
+        problem.hi[head:][equality] = problem.lo[head:][equality] = z[head:][equality] + 0.1
+        if step == 30:
+            problem.W = rng.uniform(0.5, 2.0, size=n)
+        thresholds = (0.01, 0.01, 0.01) if step < 45 else (0.01, 0.0, 0.02)
+        kept = level_damping(problem, x, thresholds, 0.05)
+        fresh = level_damping(problem.copy(), x, thresholds, 0.05)
+        assert kept.sigma_min == pytest.approx(fresh.sigma_min, nan_ok=True, rel=0, abs=0)
+        for a, b in zip(kept.rows, fresh.rows, strict=True):
+            assert (a is None and b is None) or np.array_equal(a, b)
