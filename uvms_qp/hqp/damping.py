@@ -56,7 +56,7 @@ computed; otherwise the levels are examined one by one as above. What does not c
 calls (views of the level rows and sides, ``W^(1/2)``, the thresholds, and per set of active rows
 the indices of the rows stacked and the buffers of the Gram matrices) is kept per problem, so a
 call that the screen settles is about twenty numpy and LAPACK calls: on the demo stack (4 levels,
-33 rows, 10 variables) about 160 k instructions, a third of them deciding the active rows.
+33 rows, 10 variables) about 215 k instructions, a third of them deciding the active rows.
 
 A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
 of the user's problem: a certificate of the user's problem does not apply to it (see
