@@ -84,7 +84,7 @@ class StationKeepingTask(ErrorTask):
         self._target_arg = None if target is None else as_vector(target, f"{self.name}.target")
         self._pose_arg = None if pose is None else as_pose(pose, f"{self.name}.pose")
         self.axes: list[str] = []
-        self._idx: Any = slice(0, 0)
+        self._idx: Any = None
         self._angle_pos: list[int] = []
         self._target: FloatArray | None = None
 
@@ -111,7 +111,9 @@ class StationKeepingTask(ErrorTask):
                              f"{axes}, got {self._target_arg.shape[0]}")
         self.axes = list(axes)
         eta_pos = [known.index(a) for a in axes]
-        self._idx = np.array(eta_pos, dtype=np.intp)
+        # None: every coordinate of eta in order (its arrays used as they are, no copy)
+        self._idx = (None if eta_pos == list(range(len(known)))
+                     else np.array(eta_pos, dtype=np.intp))
         self._angle_pos = [i for i, a in enumerate(axes) if a in ANGLE_AXES]
         if self._pose_arg is not None:
             self._target_arg = self._pose_eta(model, self._pose_arg)[eta_pos]
@@ -174,13 +176,15 @@ class StationKeepingTask(ErrorTask):
     def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
         """``(J_eta,S, (eta_d - eta)_S, None)``, angles wrapped [m, rad]."""
         idx = self._idx
-        eta = state.eta.take(idx)
-        J = state.vehicle_pose_jacobian().take(idx, axis=0)
+        if idx is None:
+            eta, J = state.eta, state.vehicle_pose_jacobian()
+        else:
+            eta, J = state.eta.take(idx), state.vehicle_pose_jacobian().take(idx, axis=0)
         target = self._target
         if target is None:
             if self.hold == "current":
-                return J, np.zeros(idx.shape[0]), None
-            target = self._target = eta
+                return J, np.zeros(len(self.axes)), None
+            target = self._target = eta.copy()
         e = target - eta
         for i in self._angle_pos:
             e[i] = (e.item(i) + math.pi) % _TWO_PI - math.pi
