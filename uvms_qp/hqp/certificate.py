@@ -20,9 +20,10 @@ equality row met exactly).
 For any multipliers ``lambda`` (signed: ``lambda_i > 0`` on the upper side of row ``i``, ``< 0``
 on its lower side; the box rows included) and any feasible ``x*``, convexity gives
 
-    f_k(x) - f_k(x*) <= sum_j |r_j| (width_j + |s_j|) + sum_i |lambda_i| (delta_i + eps_i) =: df,
+    f_k(x) - f_k(x*) <= sum_j |r_j| (width_j + 2 |s_j|) + sum_i |lambda_i| (delta_i + eps_i) =: df,
 
-with ``r = g + A_act' lambda``, ``width_j`` the box width of variable ``j``, ``delta_i`` the
+with ``r = g + A_act' lambda``, ``width_j`` the box width of variable ``j`` (``width_j + 2 |s_j|``
+the distance between its frozen sides, at least ``|x_j - x*_j|``), ``delta_i`` the
 distance of row ``i`` to the side its multiplier points to and ``eps_i`` the *freeze allowance*
 ``freeze_tol * max(1, |a_i x|)`` of a higher level row (0 for the box and hard rows). A variable
 without a box has no width: its part of ``r`` is moved onto the level's own rows instead, with
@@ -50,16 +51,22 @@ the polar of the cone of active normals, i.e. ``-r`` is the steepest feasible de
 ``d* = argmin 1/2 |d|^2 + g'd`` subject to ``a_i' d <= 0`` (upper side active), ``>= 0`` (lower
 side active), the box rows as simple bounds (Moreau's decomposition; ``d* = 0`` exactly when
 ``x`` is stationary): a least-distance problem (``H = I``), DAQP's own problem class, whose
-multipliers are the ``lambda`` above. One DAQP workspace per problem holds every row above the
-lowest level in place (the rows a controller writes every tick); per answer, one product
-``A x`` gives every distance to a frozen side and one product every unmet level's gradient;
-the levels are then solved from the lowest unmet one up, each switching off the rows of the
-level below it (infinite sides) and handing DAQP its unit gradient (two C calls from an empty
-working set); the bounds of all levels come from a few matrix products. A level these
-multipliers leave unproven gets them once more by non-negative least squares on the same active
-sides (DAQP's dual active set can stall on a degenerate set: more active sides than free
-variables, rows active on both sides). Levels met to tolerance
-cost nothing, and an answer whose levels are all met is not looked at. Measured in
+multipliers are the ``lambda`` above. Each level has its own DAQP workspace reading the box
+and the rows above the level in place (the rows a controller writes every tick). Per answer, a
+fixed sequence of numpy calls on contiguous buffers gives ``A x``, every distance to a frozen
+side (a missing side gets the finite stand-in ``1e150``, and a multiplier on such a side, or a
+residual on a variable without a box, fails the bound), the box widths, the freeze allowances
+and each unmet level's gradient; the bounds of all levels come from one product of the
+multipliers with ``[distances; allowances; missing sides]`` and two more with the rows and
+``[widths; missing boxes]``. A closed loop's active sides
+hardly change between ticks, so each level first tries only the sides that carried the
+multipliers of its latest certified answer, DAQP starting from its latest working set (two C
+calls); only a level these leave uncertified gets a cold solve on every active side (the sides
+within ``act_tol`` of the frozen set), and a level those leave unproven gets them once more by
+non-negative least squares on the same active sides (DAQP's dual active set can stall on a
+degenerate set: more active sides than free variables, rows active on both sides). Either way
+the verdict is the bound's, whatever the multipliers. Levels met to tolerance cost nothing, and
+an answer whose levels are all met is not looked at. Measured in
 ``benchmarks/bench_certificate.py``.
 
 :func:`repair` starts from an answer whose certificate fails and solves the first failing level
@@ -320,24 +327,27 @@ class _Work:
         self.big = np.full(2 * m, _BIG)
         # [distances to the frozen lower sides, to the upper ones; the freeze allowance twice],
         # against the multipliers split into [lower parts; upper parts]
-        self.V = V = np.zeros((2, 2 * m))
+        self.V = V = np.zeros((3, 2 * m))
         self.dist, self.dist_lo, self.dist_up = V[0], V[0, :m], V[0, m:]
         self.dist2 = V[0].reshape(2, m)
         self.allow_lo, self.allow_up = V[1, :m], V[1, m:]
+        self.missing = V[2]  # 1 on a side at or beyond _BIG (none, in practice)
         self.allow_scale = np.full(m, freeze_tol)
         self.allow_scale[:head] = 0.0  # no allowance on the box and hard rows
         self.box_lo, self.box_up = V[0, :n], V[0, m:m + n]
-        self.width = np.empty(n)
+        self.WU = np.zeros((2, n))  # [widths; 1 where a variable has no box]
+        self.width, self.unboxed = self.WU[0], self.WU[1]
+        self.big_n = self.big[:n]
         self.weighted = np.empty(M - head)  # w s on the level rows
-        self.grads = np.empty((p, n))
+        self.grads = np.zeros((p, n))  # (rows of met levels: stale or 0, never read)
         self.LAMT = np.zeros((m, p))  # signed multipliers, one column per level
         self.split = np.zeros((2 * m, p))
         self.lower, self.upper = self.split[:m], self.split[m:]
         self.zeros = np.zeros((m, p))
         self.R = np.empty((p, n))
         self.absR = np.empty((p, n))
-        self.out = np.empty((4, p))
-        self.out_lam, self.out_width, self.out_stat = self.out[:2], self.out[2], self.out[3]
+        self.out = np.empty((6, p))
+        self.out_lam, self.out_width, self.out_stat = self.out[:3], self.out[3:5], self.out[5]
         self.tol = np.empty(m)
         self.free = np.empty((2, m), dtype=bool)  # sides not active
         self.polars: list[_Polar | None] = [None] * p
@@ -357,7 +367,9 @@ class _Work:
         np.subtract(self.hi, y, out=self.dist_up)
         np.add(self.dist_up, a_m, out=self.dist_up)
         np.minimum(self.dist, self.big, out=self.dist)
+        np.greater_equal(self.dist, self.big, out=self.missing)
         np.add(self.box_lo, self.box_up, out=self.width)  # hi - lo + 2 |s| of each variable
+        np.greater_equal(self.width, self.big_n, out=self.unboxed)
         np.abs(y, out=self.ay)
         np.maximum(self.ay, self.ones, out=self.allow_lo)
         np.multiply(self.allow_lo, self.allow_scale, out=self.allow_lo)
@@ -368,8 +380,11 @@ class _Work:
         """The bound's parts for the multipliers in ``LAMT``, one entry per level.
 
         Returns:
-            ``[sum |lambda_i| delta_i, sum |lambda_i| eps_i, sum |r_j| width_j, max |r_j|]``
-            (``r = g + A' lambda`` is left in ``R``, ``|r|`` in ``absR``).
+            ``[sum |lambda_i| delta_i, sum |lambda_i| eps_i, sum |lambda_i| on missing sides,
+            sum |r_j| width_j, sum |r_j| on variables without a box, max |r_j|]`` (``r = g +
+            A' lambda`` is left in ``R``, ``|r|`` in ``absR``). The first and fourth are the
+            bound only where the third and fifth are 0 (widths and distances at or beyond
+            ``_BIG`` are stand-ins).
         """
         R = self.LAMT.T.dot(self.rows, out=self.R)
         np.add(R, self.grads, out=R)
@@ -377,7 +392,7 @@ class _Work:
         np.maximum(self.LAMT, self.zeros, out=self.upper)
         np.subtract(self.upper, self.LAMT, out=self.lower)
         self.V.dot(self.split, out=self.out_lam)
-        absR.dot(self.width, out=self.out_width)
+        self.WU.dot(absR.T, out=self.out_width)
         np.maximum.reduce(absR, axis=1, out=self.out_stat)
         return self.out.tolist()
 
@@ -489,9 +504,9 @@ class Certifier:
                 tried.append(False)
         rest = []
         if any(tried):
-            charge, allow, wide, stat = work.bound()
+            charge, allow, missing, wide, unboxed, stat = work.bound()
             for i, k in enumerate(unmet):
-                if tried[i]:
+                if tried[i] and not missing[k] and not unboxed[k]:
                     tol_k = opt_tol * scales[i]
                     verdict, gap = _verdict(charge[k] + wide[k], allow[k], False, residuals[k],
                                             tol_k)
@@ -535,20 +550,18 @@ class Certifier:
                 binding.settings = _LDP_SETTINGS
             if not solved:
                 polar.lam.fill(0.0)
-        charge, allow, wide, stat = work.bound()
+        charge, allow, missing, wide, loose_r, stat = work.bound()
         width = work.width
         unboxed = None if float(np.maximum.reduce(width)) < _BIG else width >= _BIG
         retry = []
         for i in rest:
             k = unmet[i]
             rho, tol_k = residuals[k], self.opt_tol * scales[i]
-            df, loose = charge[k] + wide[k], False
+            # a residual on a variable without a box is not bounded by a width: such a level
+            # is settled by the level's own dual below
+            df, loose = charge[k] + wide[k], missing[k] > 0.0 or loose_r[k] > 0.0
             if unboxed is not None:
-                # a residual on a variable without a box is not bounded by a width: such a
-                # level is settled by the level's own dual below
-                absr = work.absR[k]
-                loose = bool((absr[unboxed] > 0.0).any())
-                df = charge[k] + float(absr[~unboxed].dot(width[~unboxed]))
+                df = charge[k] + float(work.absR[k][~unboxed].dot(width[~unboxed]))
             verdict, gap = _verdict(df, allow[k], loose, rho, tol_k)
             out[k] = LevelCertificate(k, verdict, rho, stat[k], gap)
             if verdict == CERTIFIED:
@@ -564,14 +577,16 @@ class Certifier:
             polar = polars[unmet[i]]
             assert polar is not None
             _nnls(work.rows, polar.grad, act, polar.lam)
-        charge, allow, wide, _ = work.bound()
+        charge, allow, missing, wide, _, _ = work.bound()
         for i in retry:
             k = unmet[i]
             rho, tol_k, old = residuals[k], self.opt_tol * scales[i], out[k]
             r: FloatArray | None = work.R[k]
             extra = 0.0
             verdict, gap = UNPROVEN, math.inf
-            if unboxed is None:
+            if missing[k] > 0.0:
+                pass  # (not from the active sides: a side at or beyond _BIG)
+            elif unboxed is None:
                 verdict, gap = _verdict(charge[k] + wide[k], allow[k], False, rho, tol_k)
             else:
                 r, extra = _unboxed_dual(problem, k, s, work.R[k], unboxed)
