@@ -20,9 +20,10 @@ equality row met exactly).
 For any multipliers ``lambda`` (signed: ``lambda_i > 0`` on the upper side of row ``i``, ``< 0``
 on its lower side; the box rows included) and any feasible ``x*``, convexity gives
 
-    f_k(x) - f_k(x*) <= sum_j |r_j| (width_j + |s_j|) + sum_i |lambda_i| (delta_i + eps_i) =: df,
+    f_k(x) - f_k(x*) <= sum_j |r_j| (width_j + 2 |s_j|) + sum_i |lambda_i| (delta_i + eps_i) =: df,
 
-with ``r = g + A_act' lambda``, ``width_j`` the box width of variable ``j``, ``delta_i`` the
+with ``r = g + A_act' lambda``, ``width_j`` the box width of variable ``j`` (``width_j + 2 |s_j|``
+the distance between its frozen sides, at least ``|x_j - x*_j|``), ``delta_i`` the
 distance of row ``i`` to the side its multiplier points to and ``eps_i`` the *freeze allowance*
 ``freeze_tol * max(1, |a_i x|)`` of a higher level row (0 for the box and hard rows). A variable
 without a box has no width: its part of ``r`` is moved onto the level's own rows instead, with
@@ -50,16 +51,22 @@ the polar of the cone of active normals, i.e. ``-r`` is the steepest feasible de
 ``d* = argmin 1/2 |d|^2 + g'd`` subject to ``a_i' d <= 0`` (upper side active), ``>= 0`` (lower
 side active), the box rows as simple bounds (Moreau's decomposition; ``d* = 0`` exactly when
 ``x`` is stationary): a least-distance problem (``H = I``), DAQP's own problem class, whose
-multipliers are the ``lambda`` above. One DAQP workspace per problem holds every row above the
-lowest level in place (the rows a controller writes every tick); per answer, one product
-``A x`` gives every distance to a frozen side and one product every unmet level's gradient;
-the levels are then solved from the lowest unmet one up, each switching off the rows of the
-level below it (infinite sides) and handing DAQP its unit gradient (two C calls from an empty
-working set); the bounds of all levels come from a few matrix products. A level these
-multipliers leave unproven gets them once more by non-negative least squares on the same active
-sides (DAQP's dual active set can stall on a degenerate set: more active sides than free
-variables, rows active on both sides). Levels met to tolerance
-cost nothing, and an answer whose levels are all met is not looked at. Measured in
+multipliers are the ``lambda`` above. Each level has its own DAQP workspace reading the box
+and the rows above the level in place (the rows a controller writes every tick). Per answer, a
+fixed sequence of numpy calls on contiguous buffers gives ``A x``, every distance to a frozen
+side (a missing side gets the finite stand-in ``1e150``, and a multiplier on such a side, or a
+residual on a variable without a box, fails the bound), the box widths, the freeze allowances
+and each unmet level's gradient; the bounds of all levels come from one product of the
+multipliers with ``[distances; allowances; missing sides]`` and two more with the rows and
+``[widths; missing boxes]``. A closed loop's active sides
+hardly change between ticks, so each level first tries only the sides that carried the
+multipliers of its latest certified answer, DAQP starting from its latest working set (two C
+calls); only a level these leave uncertified gets a cold solve on every active side (the sides
+within ``act_tol`` of the frozen set), and a level those leave unproven gets them once more by
+non-negative least squares on the same active sides (DAQP's dual active set can stall on a
+degenerate set: more active sides than free variables, rows active on both sides). Either way
+the verdict is the bound's, whatever the multipliers. Levels met to tolerance cost nothing, and
+an answer whose levels are all met is not looked at. Measured in
 ``benchmarks/bench_certificate.py``.
 
 :func:`repair` starts from an answer whose certificate fails and solves the first failing level
@@ -107,6 +114,8 @@ HARD_TOL = 1e-9
 _LDP_SETTINGS = {"primal_tol": 1e-8, "eps_prox": 0.0, "iter_limit": 2000, "time_limit": 0.0}
 _LDP_RETRY = {**_LDP_SETTINGS, "primal_tol": 1e-6}
 _INF = 1e30  # DAQP's infinity
+_SIDES = np.array([[-_INF], [_INF]])  # DAQP's sides of a free [lower; upper] side
+_BIG = 1e150  # finite stand-in for the distance to a missing side (no overflow times |lambda|)
 _KEEP = 8  # workspaces kept (the problems a solver alternates between: full, relaxed)
 
 
@@ -226,32 +235,174 @@ def _gap(df: float, rho: float) -> float:
 
 # ---------------------------------------------------------------------- the polar projection
 class _Polar:
-    """DAQP's least-distance workspace of one problem: every row above the lowest level.
+    """DAQP's least-distance workspace of one level: the box and every row above the level.
 
-    Rows are read in place from the problem's buffer (the box as DAQP's simple bounds); the
-    linear term ``f`` (a level's unit gradient) and the sides ``bu``, ``bl`` (0 on an active
-    side, DAQP's infinity elsewhere) are written per level.
+    The rows are read in place from the problem's buffer (the box as DAQP's simple bounds); the
+    linear term ``f`` (the level's unit gradient) is written per answer, the sides
+    ``B = [bl; bu]`` (0 on a side the multipliers may use, DAQP's infinity elsewhere) only when
+    they change. ``support`` says that ``B`` holds the sides that carried the multipliers of
+    the level's latest certified answer (the next answer tries them first), ``warm`` that DAQP's
+    working set belongs to the current ``B`` (the next solve may start from it).
+
+    Args:
+        problem: The problem.
+        k: The level.
+        binding: A fresh DAQP binding.
+        work: The problem's :class:`_Work` (the level's rows of its buffers are used).
     """
 
-    def __init__(self, problem: Problem, binding: DaqpBinding) -> None:
-        n = problem.n
-        self.m = m = problem.spans[-1][0]
+    def __init__(self, problem: Problem, k: int, binding: DaqpBinding, work: _Work) -> None:
+        n, head = problem.n, problem.head
+        self.start = start = problem.spans[k][0]
+        end = problem.spans[k][1]
         self.f = np.zeros(n)
-        self.bu = np.full(m, _INF)
-        self.bl = np.full(m, -_INF)
+        self.B = np.empty((2, start))
+        self.B[0], self.B[1] = -_INF, _INF
         self.binding = binding
-        flag, _ = binding.setup(np.eye(n), self.f, problem.A[n:m], self.bu, self.bl,
-                                np.zeros(m, dtype=np.intc), np.zeros(0, dtype=np.intc))
+        self.support = self.warm = False
+        self.rows = problem.A[start:end]  # the level's own rows and weighted slacks
+        self.weighted = work.weighted[start - head:end - head]
+        self.grad = work.grads[k]
+        self.lam = work.LAMT[:start, k]
+        self.free = work.free[:, :start]
+        self.size = np.zeros(())  # the gradient's norm (a 0-d array: no conversion per call)
+        flag, _ = binding.setup(np.eye(n), self.f, problem.A[n:start], self.B[1], self.B[0],
+                                np.zeros(start, dtype=np.intc), np.zeros(0, dtype=np.intc))
         self.ok = flag >= 0
         if self.ok:
             binding.settings = _LDP_SETTINGS
+
+    def gradient(self) -> float:
+        """The level's gradient ``A_k' (w_k s_k)`` into its row of ``grads``; returns its norm."""
+        g = self.weighted.dot(self.rows, out=self.grad)
+        size = math.sqrt(g.dot(g))
+        return size if size > 1e-300 else 1e-300
+
+    def solve(self, size: float) -> bool:
+        """Multipliers of ``min 1/2 |d|^2 + g'd / size`` on the sides ``B``, times ``size``.
+
+        Written into the level's column of ``LAMT``; False (the column left as it was) when
+        DAQP fails.
+        """
+        self.size[()] = size
+        np.divide(self.grad, self.size, out=self.f)
+        binding = self.binding
+        flag = binding.solve_ldp(True, self.warm)
+        self.warm = True
+        if flag != 1:
+            return False
+        np.multiply(binding.lam, self.size, out=self.lam)
+        return True
+
+    def set_sides(self, sides: np.ndarray) -> None:
+        """``B`` from a (2, start) mask of [lower; upper] sides the multipliers may not use."""
+        np.multiply(sides, _SIDES, out=self.B)
+        self.support = self.warm = False
+
+    def keep_support(self) -> None:
+        """Make the sides of the current multipliers the ones the next answer tries first."""
+        lam = self.lam
+        self.set_sides(np.vstack((lam >= 0.0, lam <= 0.0)))
+        self.support = self.ok
+
+
+class _Work:
+    """The certificate's buffers for one problem, and one :class:`_Polar` per level.
+
+    Rows are those above the lowest level (``m``), read in place; every array has a fixed shape
+    and every per-answer operation is on contiguous memory, so that an answer costs a short,
+    fixed sequence of numpy calls.
+    """
+
+    def __init__(self, problem: Problem, freeze_tol: float) -> None:
+        n, p, head, M = problem.n, len(problem.sizes), problem.head, problem.M
+        self.m = m = problem.spans[-1][0]
+        self.rows = problem.A[:m]
+        self.lo, self.hi = problem.lo[:m], problem.hi[:m]
+        self.y = np.empty(m)  # A x
+        self.ay = np.empty(m)  # |A x|
+        self.a = np.empty(M)  # |s|
+        self.a_m = self.a[:m]
+        self.ones = np.ones(m)
+        self.big = np.full(2 * m, _BIG)
+        # [distances to the frozen lower sides, to the upper ones; the freeze allowance twice],
+        # against the multipliers split into [lower parts; upper parts]
+        self.V = V = np.zeros((3, 2 * m))
+        self.dist, self.dist_lo, self.dist_up = V[0], V[0, :m], V[0, m:]
+        self.dist2 = V[0].reshape(2, m)
+        self.allow_lo, self.allow_up = V[1, :m], V[1, m:]
+        self.missing = V[2]  # 1 on a side at or beyond _BIG (none, in practice)
+        self.allow_scale = np.full(m, freeze_tol)
+        self.allow_scale[:head] = 0.0  # no allowance on the box and hard rows
+        self.box_lo, self.box_up = V[0, :n], V[0, m:m + n]
+        self.WU = np.zeros((2, n))  # [widths; 1 where a variable has no box]
+        self.width, self.unboxed = self.WU[0], self.WU[1]
+        self.big_n = self.big[:n]
+        self.weighted = np.empty(M - head)  # w s on the level rows
+        self.grads = np.zeros((p, n))  # (rows of met levels: stale or 0, never read)
+        self.LAMT = np.zeros((m, p))  # signed multipliers, one column per level
+        self.split = np.zeros((2 * m, p))
+        self.lower, self.upper = self.split[:m], self.split[m:]
+        self.zeros = np.zeros((m, p))
+        self.R = np.empty((p, n))
+        self.absR = np.empty((p, n))
+        self.out = np.empty((6, p))
+        self.out_lam, self.out_width, self.out_stat = self.out[:3], self.out[3:5], self.out[5]
+        self.tol = np.empty(m)
+        self.free = np.empty((2, m), dtype=bool)  # sides not active
+        self.polars: list[_Polar | None] = [None] * p
+
+    def prepare(self, problem: Problem, x: FloatArray, s: FloatArray) -> None:
+        """Distances to the frozen sides, box widths and freeze allowances at ``x``.
+
+        A missing side's distance becomes a finite stand-in ``_BIG`` (a missing side never
+        carries a multiplier, and one it carried would be charged that much), and so does a
+        missing box width: a variable whose width is at least ``_BIG`` has no box.
+        """
+        y = self.rows.dot(x, out=self.y)
+        np.abs(s, out=self.a)
+        a_m = self.a_m
+        np.subtract(y, self.lo, out=self.dist_lo)
+        np.add(self.dist_lo, a_m, out=self.dist_lo)
+        np.subtract(self.hi, y, out=self.dist_up)
+        np.add(self.dist_up, a_m, out=self.dist_up)
+        np.minimum(self.dist, self.big, out=self.dist)
+        np.greater_equal(self.dist, self.big, out=self.missing)
+        np.add(self.box_lo, self.box_up, out=self.width)  # hi - lo + 2 |s| of each variable
+        np.greater_equal(self.width, self.big_n, out=self.unboxed)
+        np.abs(y, out=self.ay)
+        np.maximum(self.ay, self.ones, out=self.allow_lo)
+        np.multiply(self.allow_lo, self.allow_scale, out=self.allow_lo)
+        self.allow_up[...] = self.allow_lo
+        np.multiply(problem.w, s[problem.head:], out=self.weighted)
+
+    def bound(self) -> list[list[float]]:
+        """The bound's parts for the multipliers in ``LAMT``, one entry per level.
+
+        Returns:
+            ``[sum |lambda_i| delta_i, sum |lambda_i| eps_i, sum |lambda_i| on missing sides,
+            sum |r_j| width_j, sum |r_j| on variables without a box, max |r_j|]`` (``r = g +
+            A' lambda`` is left in ``R``, ``|r|`` in ``absR``). The first and fourth are the
+            bound only where the third and fifth are 0 (widths and distances at or beyond
+            ``_BIG`` are stand-ins).
+        """
+        R = self.LAMT.T.dot(self.rows, out=self.R)
+        np.add(R, self.grads, out=R)
+        absR = np.abs(R, out=self.absR)
+        np.maximum(self.LAMT, self.zeros, out=self.upper)
+        np.subtract(self.upper, self.LAMT, out=self.lower)
+        self.V.dot(self.split, out=self.out_lam)
+        self.WU.dot(absR.T, out=self.out_width)
+        np.maximum.reduce(absR, axis=1, out=self.out_stat)
+        return self.out.tolist()
 
 
 class Certifier:
     """The run-time optimality certificate (module docstring), one callable per solver.
 
-    ``certifier(problem, x, s, residuals) -> Certificate``; keeps one DAQP workspace per
-    problem it has seen (the last few).
+    ``certifier(problem, x, s, residuals) -> Certificate``; keeps the buffers and DAQP
+    workspaces of each problem it has seen (the last few), and per level the sides that carried
+    the multipliers of its latest certified answer (tried first on the next answer).
 
     Args:
         level_tol: Relative tolerance deciding that a level is met.
@@ -274,20 +425,20 @@ class Certifier:
         self.level_tol, self.opt_tol, self.freeze_tol = level_tol, opt_tol, freeze_tol
         self.stat_tol, self.act_tol, self.hard_tol = stat_tol, act_tol, hard_tol
         self.open_binding: Callable[[], DaqpBinding] = open_daqp
-        self._polars: dict[Problem, _Polar] = {}
+        self._works: dict[Problem, _Work] = {}
 
     def reset(self) -> None:
         """Forget every workspace."""
-        self._polars.clear()
+        self._works.clear()
 
-    def _polar(self, problem: Problem) -> _Polar:
-        polar = self._polars.get(problem)
-        if polar is None:
-            polar = _Polar(problem, self.open_binding())
-            if len(self._polars) >= _KEEP:
-                self._polars.pop(next(iter(self._polars)))
-            self._polars[problem] = polar
-        return polar
+    def _work(self, problem: Problem) -> _Work:
+        work = self._works.get(problem)
+        if work is None:
+            work = _Work(problem, self.freeze_tol)
+            if len(self._works) >= _KEEP:
+                self._works.pop(next(iter(self._works)))
+            self._works[problem] = work
+        return work
 
     def __call__(self, problem: Problem, x: FloatArray, s: FloatArray | None = None,
                  residuals: list[float] | None = None, hard_violation: float | None = None
@@ -310,14 +461,14 @@ class Certifier:
             s = slacks(problem, x)
         if residuals is None:
             residuals = _residuals(problem, s)
-        head, spans, level_tol = problem.head, problem.spans, self.level_tol
-        hv = float(np.abs(s[:head]).max(initial=0.0)) if hard_violation is None else (
+        level_tol = self.level_tol
+        hv = float(np.abs(s[:problem.head]).max(initial=0.0)) if hard_violation is None else (
             hard_violation)
         inside = hv <= self.hard_tol or hv <= self.hard_tol * problem.hard_scale
         unmet, scales = [], []
         for k, r in enumerate(residuals):
             if r > level_tol:
-                scale = problem.scale(*spans[k])
+                scale = problem.level_scale(k)
                 if r > level_tol * scale:
                     unmet.append(k)
                     scales.append(scale)
@@ -330,164 +481,150 @@ class Certifier:
 
     def _levels(self, problem: Problem, x: FloatArray, s: FloatArray, residuals: list[float],
                 unmet: list[int], scales: list[float]) -> dict[int, LevelCertificate]:
-        """Verdicts of the unmet levels (the module docstring's bound, multipliers by DAQP)."""
-        n, head, spans = problem.n, problem.head, problem.spans
-        end = spans[unmet[-1]][0]  # constraint rows: everything above the lowest unmet level
-        A = problem.A
-        Ae = A[:end]
-        y = Ae.dot(x)
-        ay = np.abs(y)
-        a = np.abs(s[:end])
-        # distances to the frozen sides, [lower; upper] (inf where a side is missing)
-        D = np.subtract(y, problem.sides[:, :end])
-        D *= problem.signs[:, :end]
-        D += a
-        tol = ay * self.act_tol
-        tol += self.act_tol
-        act = tol >= D
-        # every unmet level's gradient, and the size that makes it a unit vector for DAQP
-        WS = problem.G[[k + 1 for k in unmet]]
-        WS *= s
-        grads = WS.dot(A)
-        size = np.sqrt(np.einsum("ij,ij->i", grads, grads))
-        np.maximum(size, 1e-300, out=size)
-        polar = self._polar(problem)
-        u = len(unmet)
-        LAM = np.zeros((u, end))
-        solved = [False] * u
-        if polar.ok:
-            # the active sides of every row above the lowest unmet level; the levels from the
-            # lowest up, each switching off the rows of the level below it
-            f, bu, bl, binding = polar.f, polar.bu, polar.bl, polar.binding
-            bu[:end] = np.where(act[1], 0.0, _INF)
-            bl[:end] = np.where(act[0], 0.0, -_INF)
-            bu[end:] = _INF
-            bl[end:] = -_INF
-            top = end
-            for i in range(u - 1, -1, -1):
-                start = spans[unmet[i]][0]
-                bu[start:top] = _INF
-                bl[start:top] = -_INF
-                top = start
-                np.divide(grads[i], size[i], out=f)
-                solved[i] = binding.solve_cold(i == u - 1) == 1
-                if not solved[i]:
-                    # DAQP can call a degenerate set of active rows (more than the free
-                    # variables, nearly dependent) infeasible at a tight tolerance; a looser one
-                    # only loosens the multipliers, which the bound then charges
-                    binding.settings = _LDP_RETRY
-                    solved[i] = binding.solve_cold(False) == 1
-                    binding.settings = _LDP_SETTINGS
-                if solved[i]:  # (a failed solve leaves DAQP's multipliers as they were)
-                    LAM[i, :start] = binding.lam[:start]
-        LAM *= size[:, None]
-        width = problem.hi[:n] - problem.lo[:n]
-        width += a[:n]
-        boxed = bool(math.isfinite(float(width.sum())))  # every variable has a finite box
-        unboxed = None if boxed else ~(width < math.inf)
-        if unboxed is not None:
-            width = np.where(unboxed, 0.0, width)
-        bound = _Bound(Ae, grads, act, np.where(act, D, 0.0), width, np.maximum(ay, 1.0), head,
-                       self.freeze_tol)
-        R, _, df_act, freeze = bound(LAM)
-        absR = np.abs(R)
-        df = absR.dot(width)
-        df += df_act
-        stat = absR.max(axis=1).tolist()
-        # a residual on a variable without a box is not bounded by a width: such a level is
-        # settled by the level's own dual below
-        loose: list[bool] = [False] * len(unmet)
-        if unboxed is not None:
-            loose = [bool(v) for v in np.any(absR[:, unboxed] > 0.0, axis=1).tolist()]
-        dfl, frl = df.tolist(), freeze.tolist()
-        out = {}
-        opt_tol = self.opt_tol
-        for i, k in enumerate(unmet):
-            rho, tol_k = residuals[k], opt_tol * scales[i]
-            verdict, gap = _verdict(dfl[i], frl[i], loose[i], rho, tol_k)
-            if verdict == UNPROVEN:
-                # the multipliers again by non-negative least squares on the same active sides
-                # (DAQP's are accurate to its primal tolerance only, and its dual active set
-                # can stall on a degenerate set: more active rows than free variables, rows
-                # active on both sides); an unboxed residual left is then moved onto the
-                # level's own rows
-                R2, _, act2, fr2 = bound(_nnls(Ae, grads[i], act, spans[k][0]), [i])
-                r, extra = R2[0], 0.0
-                if unboxed is not None:
-                    r, extra = _unboxed_dual(problem, k, s, r, unboxed)
-                verdict2, gap2 = UNPROVEN, math.inf
-                if r is not None:
-                    ar = np.abs(r)
-                    loose2 = unboxed is not None and bool(
-                        (ar[unboxed] > self.stat_tol * float(np.abs(grads[i]).max())).any())
-                    # (what the least-norm solve leaves: round-off, or a direction off the
-                    # level's rows, which no dual of the level can absorb)
-                    verdict2, gap2 = _verdict(float(ar.dot(width)) + float(act2[0]) + extra,
-                                              float(fr2[0]), loose2, rho, tol_k)
-                if gap2 < gap:
-                    verdict, gap, stat[i] = verdict2, gap2, float(np.abs(r).max())
-            out[k] = LevelCertificate(k, verdict, rho, stat[i], gap)
+        """Verdicts of the unmet levels (the module docstring's bound, multipliers by DAQP).
+
+        Each level first tries the sides that carried the multipliers of its latest certified
+        answer (DAQP started from its latest working set); a level these do not certify gets
+        multipliers on every active side (:meth:`_active`).
+        """
+        work = self._work(problem)
+        work.prepare(problem, x, s)
+        polars, opt_tol = work.polars, self.opt_tol
+        sizes, tried, out = [], [], {}
+        for k in unmet:
+            polar = polars[k]
+            if polar is None:
+                polar = polars[k] = _Polar(problem, k, self.open_binding(), work)
+            size = polar.gradient()
+            sizes.append(size)
+            if polar.support:
+                polar.support = polar.solve(size)
+                tried.append(polar.support)
+            else:
+                tried.append(False)
+        rest = []
+        if any(tried):
+            charge, allow, missing, wide, unboxed, stat = work.bound()
+            for i, k in enumerate(unmet):
+                if tried[i] and not missing[k] and not unboxed[k]:
+                    tol_k = opt_tol * scales[i]
+                    verdict, gap = _verdict(charge[k] + wide[k], allow[k], False, residuals[k],
+                                            tol_k)
+                    if verdict == CERTIFIED:
+                        out[k] = LevelCertificate(k, verdict, residuals[k], stat[k], gap)
+                        continue
+                rest.append(i)
+        else:
+            rest = list(range(len(unmet)))
+        if rest:
+            self._active(problem, work, s, residuals, unmet, rest, sizes, scales, out)
         return out
 
+    def _active(self, problem: Problem, work: _Work, s: FloatArray, residuals: list[float],
+                unmet: list[int], rest: list[int], sizes: list[float], scales: list[float],
+                out: dict[int, LevelCertificate]) -> None:
+        """Verdicts of the levels ``unmet[i], i in rest`` with multipliers on every active side.
 
-class _Bound:
-    """The module docstring's bound for rows of multipliers (one row per unmet level).
-
-    Args:
-        Ae: Constraint rows (box, hard, levels above the lowest unmet one), shape (m, n).
-        grads: Gradients of the unmet levels, shape (u, n).
-        act: Rows whose [lower; upper] frozen side is active, shape (2, m).
-        dist: Distances to the frozen sides where active (0 elsewhere), ``[lower; upper]``.
-        width: Box width plus the box slack of each variable (0 where unboxed), shape (n,).
-        big: ``max(1, |a_i x|)`` of each row, shape (m,).
-        head: Box and hard rows (no freeze allowance).
-        freeze_tol: The freeze allowance relative to ``big``.
-    """
-
-    def __init__(self, Ae: FloatArray, grads: FloatArray, act: np.ndarray, dist: FloatArray,
-                 width: FloatArray, big: FloatArray, head: int, freeze_tol: float) -> None:
-        self.Ae, self.grads, self.act, self.dist, self.width = Ae, grads, act, dist, width
-        self.big, self.head, self.freeze_tol = big, head, freeze_tol
-
-    def __call__(self, LAM: FloatArray, rows: list[int] | None = None
-                 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """``(r, signed multipliers, sum |lambda_i| delta_i, freeze allowance)`` per row of LAM.
-
-        Multipliers of the wrong sign are dropped first (any multipliers of the right signs give
-        a valid bound). ``rows`` picks the levels the rows of ``LAM`` belong to (default all).
+        DAQP on the active sides of the rows above each level; a level these multipliers leave
+        unproven gets them once more by non-negative least squares (DAQP's dual active set can
+        stall on a degenerate set: more active sides than free variables, rows active on both
+        sides), and an unboxed residual left is then moved onto the level's own rows.
         """
-        grads = self.grads if rows is None else self.grads[rows]
-        act, dist, head = self.act, self.dist, self.head
-        pos = LAM > 0.0
-        L = LAM * np.where(pos, act[1], act[0])  # a multiplier only on an active side
-        absL = np.abs(L)
-        R = L.dot(self.Ae)
-        R += grads
-        df_act = np.einsum("ij,ij->i", absL, np.where(pos, dist[1], dist[0]))
-        freeze = absL[:, head:].dot(self.big[head:])
-        freeze *= self.freeze_tol
-        return R, L, df_act, freeze
+        tol = np.multiply(work.ay, self.act_tol, out=work.tol)
+        tol += self.act_tol
+        np.less(tol, work.dist2, out=work.free)
+        polars = work.polars
+        for i in rest:
+            polar = polars[unmet[i]]
+            assert polar is not None
+            polar.set_sides(polar.free)
+            solved = polar.ok and polar.solve(sizes[i])
+            if polar.ok and not solved:
+                # DAQP can call a degenerate set of active rows (more than the free variables,
+                # nearly dependent) infeasible at a tight tolerance; a looser one only loosens
+                # the multipliers, which the bound then charges
+                binding = polar.binding
+                binding.settings = _LDP_RETRY
+                polar.warm = False
+                solved = polar.solve(sizes[i])
+                binding.settings = _LDP_SETTINGS
+            if not solved:
+                polar.lam.fill(0.0)
+        charge, allow, missing, wide, loose_r, stat = work.bound()
+        width = work.width
+        unboxed = None if float(np.maximum.reduce(width)) < _BIG else width >= _BIG
+        retry = []
+        for i in rest:
+            k = unmet[i]
+            rho, tol_k = residuals[k], self.opt_tol * scales[i]
+            # a residual on a variable without a box is not bounded by a width: such a level
+            # is settled by the level's own dual below
+            df, loose = charge[k] + wide[k], missing[k] > 0.0 or loose_r[k] > 0.0
+            if unboxed is not None:
+                df = charge[k] + float(work.absR[k][~unboxed].dot(width[~unboxed]))
+            verdict, gap = _verdict(df, allow[k], loose, rho, tol_k)
+            out[k] = LevelCertificate(k, verdict, rho, stat[k], gap)
+            if verdict == CERTIFIED:
+                polars[k].keep_support()  # type: ignore[union-attr]
+            elif verdict == UNPROVEN:
+                retry.append(i)
+        if not retry:
+            return
+        # the multipliers again by non-negative least squares on the same active sides (DAQP's
+        # are accurate to its primal tolerance only)
+        act = ~work.free
+        for i in retry:
+            polar = polars[unmet[i]]
+            assert polar is not None
+            _nnls(work.rows, polar.grad, act, polar.lam)
+        charge, allow, missing, wide, _, _ = work.bound()
+        for i in retry:
+            k = unmet[i]
+            rho, tol_k, old = residuals[k], self.opt_tol * scales[i], out[k]
+            r: FloatArray | None = work.R[k]
+            extra = 0.0
+            verdict, gap = UNPROVEN, math.inf
+            if missing[k] > 0.0:
+                pass  # (not from the active sides: a side at or beyond _BIG)
+            elif unboxed is None:
+                verdict, gap = _verdict(charge[k] + wide[k], allow[k], False, rho, tol_k)
+            else:
+                r, extra = _unboxed_dual(problem, k, s, work.R[k], unboxed)
+                if r is not None:
+                    ar = np.abs(r)
+                    # (what the least-norm solve leaves: round-off, or a direction off the
+                    # level's rows, which no dual of the level can absorb)
+                    loose = bool((ar[unboxed] > self.stat_tol * float(
+                        np.abs(work.grads[k]).max())).any())
+                    verdict, gap = _verdict(
+                        float(ar[~unboxed].dot(width[~unboxed])) + charge[k] + extra,
+                        allow[k], loose, rho, tol_k)
+            if gap < old.gap and r is not None:
+                out[k] = LevelCertificate(k, verdict, rho, float(np.abs(r).max()), gap)
+                if verdict == CERTIFIED:
+                    polars[k].keep_support()  # type: ignore[union-attr]
 
 
-def _nnls(Ae: FloatArray, g: FloatArray, act: np.ndarray, start: int) -> FloatArray:
-    """Signed multipliers (1, m) of ``min |g + A' lambda|`` on the active sides of rows < start.
+def _nnls(A: FloatArray, g: FloatArray, act: np.ndarray, lam: FloatArray) -> None:
+    """Signed multipliers of ``min |g + A' lambda|`` on the active sides, written into ``lam``.
 
-    One :func:`scipy.optimize.nnls` on unit columns (``+a`` at an upper side, ``-a`` at a lower
-    one).
+    ``lam`` has one entry per leading row of ``A`` that may carry one (the rows above the
+    level); one :func:`scipy.optimize.nnls` on unit columns (``+a`` at an upper side, ``-a`` at
+    a lower one).
     """
+    start = lam.shape[0]
     up = np.flatnonzero(act[1, :start])
     dn = np.flatnonzero(act[0, :start])
-    lam = np.zeros((1, Ae.shape[0]))
+    lam.fill(0.0)
     if not up.size + dn.size:
-        return lam
+        return
     rows = np.concatenate((up, dn))
-    norms = np.sqrt(np.einsum("ij,ij->i", Ae[rows], Ae[rows]))
+    norms = np.sqrt(np.einsum("ij,ij->i", A[rows], A[rows]))
     live = norms > 0.0
     rows, norms = rows[live], norms[live]
     sign = np.where(np.arange(live.size)[live] < up.size, 1.0, -1.0)
-    coef, _ = nnls((Ae[rows] * (sign / norms)[:, None]).T, -g, maxiter=50 * max(rows.size, 10))
-    np.add.at(lam[0], rows, sign * coef / norms)
-    return lam
+    coef, _ = nnls((A[rows] * (sign / norms)[:, None]).T, -g, maxiter=50 * max(rows.size, 10))
+    np.add.at(lam, rows, sign * coef / norms)
 
 
 def _unboxed_dual(problem: Problem, k: int, s: FloatArray, r: FloatArray, unboxed: np.ndarray

@@ -190,8 +190,12 @@ class DaqpBinding(Protocol):
     def solve(self) -> int:
         """Solve; returns the exit flag (1 optimal, 2 soft optimal, negative on failure)."""
 
-    def solve_cold(self, rows: bool) -> int:
-        """Re-read ``f``, the sides (and rows), solve from an empty working set; sets ``lam``."""
+    def solve_ldp(self, rows: bool, warm: bool) -> int:
+        """Re-read ``f``, the sides (and rows), solve; sets ``lam``.
+
+        The solve starts from an empty working set, or (``warm``) from the working set of the
+        latest solve (valid when the sides kept their pattern since then).
+        """
 
 
 def open_daqp() -> DaqpBinding:
@@ -390,12 +394,18 @@ class NativeDaqp:
         self.iterations = res.iter
         return res.exitflag  # an int (ctypes field)
 
-    def solve_cold(self, rows: bool) -> int:
-        """Re-read ``f``, the sides (and rows), solve from an empty working set; ``lam`` is set."""
+    def solve_ldp(self, rows: bool, warm: bool) -> int:
+        """Re-read ``f``, the sides (and rows) and solve; ``lam`` is set.
+
+        From an empty working set, or (``warm``) from the latest solve's.
+        """
         lib, qp, res = self._lib, self._qp, self._res
-        qp.sense = self._empty_ptr  # DAQP copies it: the array stays empty
+        if warm:  # DAQP activates the constraints its own sense array marks active
+            qp.sense = self._view.sense
+        else:
+            qp.sense = self._empty_ptr  # DAQP copies it: the array stays empty
         lib.daqp_update_ldp(_COLD_ROWS if rows else _COLD, self._work, self._qp_ref)
-        self._warm = False
+        self._warm = warm
         lib.daqp_solve(self._res_ref, self._work)
         self.iterations = res.iter
         return int(res.exitflag)
@@ -488,8 +498,12 @@ class ModelDaqp:
         self.iterations = int(info["iterations"])
         return int(flag)
 
-    def solve_cold(self, rows: bool) -> int:
-        """``daqp.Model.update`` of ``f``, sides (and rows), empty working set; then solve."""
+    def solve_ldp(self, rows: bool, warm: bool) -> int:
+        """``daqp.Model.update`` of ``f``, sides (and rows), empty working set; then solve.
+
+        Always from an empty working set (``warm`` is ignored: the fallback binding of a DAQP
+        whose C API is not reachable).
+        """
         A, bu, bl = self._held
         if rows:
             self._model.update(f=self._f, A=A, bupper=bu, blower=bl, sense=self._empty)
