@@ -1,10 +1,10 @@
 """Singular configurations approached along paths with the smallest singular value 1e-1 -> 0.
 
 Kinematic singularities of the arm (the vehicle held by a zero rate bound, so the arm alone must
-do the task): paper 000's stretched planar arm, paper 002's extended-arm and shoulder
-singularities of the PA-10 positioning arm; the Euler-angle singularity of a vehicle at pitch
-+/-90 deg (``eta_dot = J_eta(eta) nu`` has 1/cos(theta) entries); and an algorithmic singularity,
-two levels whose rows become exactly parallel with conflicting targets.
+do the task): Soylu et al.'s (2007) stretched planar arm, Nenchev and Tsumaki's extended-arm and
+shoulder singularities of the PA-10 positioning arm; the Euler-angle singularity of a vehicle at
+pitch +/-90 deg (``eta_dot = J_eta(eta) nu`` has 1/cos(theta) entries); and an algorithmic
+singularity, two levels whose rows become exactly parallel with conflicting targets.
 
 Along each path: every command is finite and inside the hard box (bounded rates), the change
 from one path point to the next is at most the box width ``upper - lower`` per component (the
@@ -107,12 +107,12 @@ def test_paper000_stretched_arm(solver):
                   constraints=[JointVelocityBounds(limits=[RATE] * 3),
                                VehicleRateBounds(limits=[0.0, 0.0, 0.0])])
     ctrl = Controller(model, stack, solver=solver, dt=0.05)
-    check_path(ctrl, model, [make_q(s) for s in ss], 0, sigmas, f"paper 000 stretched ({solver})")
+    check_path(ctrl, model, [make_q(s) for s in ss], 0, sigmas, f"Soylu stretched ({solver})")
 
 
 @pytest.mark.parametrize("case", ["extended_arm", "shoulder"])
 def test_paper002_pa10_singularities(case):
-    """Nenchev's 4-DOF positioning arm (d3 = d5 = 1 m, ``002_1230892968c9c95c.txt``, Section 3):
+    """Nenchev and Tsumaki's 4-DOF positioning arm (d3 = d5 = 1 m, Section 3):
     the extended-arm singularity (q4 -> 0), and the shoulder singularity (end point on the Z
     axis, q2 = -q4 / 2 with q3 = 0) with the arm-plane joint 3 held by a hard row
     (``qdot_3 = 0``), where the remaining joints 1, 2, 4 lose the radial direction. The target
@@ -136,7 +136,7 @@ def test_paper002_pa10_singularities(case):
     stack = Stack(levels=[Level(EndEffectorTask(mode="position", position=target, gain=1.0)),
                           Level(PostureTask(gain=0.1))], constraints=constraints)
     ctrl = Controller(model, stack, solver="daqp", dt=0.05)
-    check_path(ctrl, model, [make_q(s) for s in ss], 0, sigmas, f"paper 002 {case}")
+    check_path(ctrl, model, [make_q(s) for s in ss], 0, sigmas, f"Nenchev and Tsumaki {case}")
 
 
 @pytest.mark.parametrize("pitch_sign", [1.0, -1.0])

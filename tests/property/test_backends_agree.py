@@ -2,7 +2,7 @@
 
 On seeded random problems (n from 3 to 30, 1 to 6 levels of full row rank together, equality
 rows, a metric W, box bounds far from the solution) the lexicographic optimum is the recursive
-null-space solution of 000_7b5f597fe4e36aa4.txt, Eq. (10) in the metric W; each back-end must match
+null-space solution of Soylu et al. (2007), Eq. (10), in the metric W; each back-end must match
 it to the tolerance the registry states for it (``SolverSpec.agreement_tol``).
 """
 
@@ -59,7 +59,7 @@ def test_backend_equals_nullspace(name, problems):
 
 
 def test_weighted_metric_equals_weighted_pseudoinverse():
-    """One level: x = W^-1 A' (A W^-1 A')^-1 b (000_7b5f597fe4e36aa4.txt, Eq. (17))."""
+    """One level: x = W^-1 A' (A W^-1 A')^-1 b (Soylu et al. (2007), Eq. (17))."""
     rng = np.random.default_rng(3)
     W = np.array([10.0, 10.0, 10.0, 1.0, 1.0, 1.0])
     for _ in range(20):

@@ -1,15 +1,20 @@
 """Closed-form redundancy-resolution schemes of the source papers, on plain matrices.
 
 No robot model and no solver: every function takes Jacobians, rates, gradients or screws and
-returns rates. Each docstring cites its paper file and equation. Modules, one concept each:
+returns rates. Each docstring cites its paper (authors, year) and equation. Modules, one concept
+each:
 
 - :mod:`.inverses`: pseudoinverse, weighted pseudoinverse, damped least squares, projector;
 - :mod:`.gradient_projection`: projected gradient, normalised multi-objective form;
 - :mod:`.task_priority`: two-task and recursive task priority, singularity-robust variant;
-- :mod:`.manipulability`: manipulability, its gradient, paper 000's dexterous task priority;
-- :mod:`.singularity_consistent`: paper 002's SC method and the 4-DOF arm's vector fields;
-- :mod:`.motion_distribution`, :mod:`.joint_limits`, :mod:`.payload`, :mod:`.fuzzy`: paper 003;
-- :mod:`.screws`, :mod:`.davies`: paper 001's screws, Davies method and virtual chains.
+- :mod:`.manipulability`: manipulability, its gradient, the dexterous task priority of
+  Soylu et al. (2007);
+- :mod:`.singularity_consistent`: Nenchev and Tsumaki's singularity-consistent method and the
+  4-DOF arm's vector fields;
+- :mod:`.motion_distribution`, :mod:`.joint_limits`, :mod:`.payload`, :mod:`.fuzzy`:
+  Wang et al. (2017);
+- :mod:`.screws`, :mod:`.davies`: dos Santos et al.'s (2006) screws, Davies method and virtual
+  chains.
 """
 
 from .davies import (

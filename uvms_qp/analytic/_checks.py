@@ -63,7 +63,8 @@ def metric_root(n: int, weights: Any = None, inverse_weights: Any = None) -> Flo
         n: Number of variables.
         weights: ``W`` as a positive (n,) diagonal or an (n, n) symmetric positive-definite matrix.
         inverse_weights: ``W^{-1}`` as a non-negative (n,) diagonal; a zero entry locks that
-            variable (paper 003's motion distribution with beta = 1). Exclusive with ``weights``.
+            variable (the motion distribution of Wang et al. (2017) with beta = 1). Exclusive
+            with ``weights``.
 
     Raises:
         InputError: both given, non-positive weights, or a non-symmetric/indefinite matrix.

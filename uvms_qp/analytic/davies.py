@@ -183,8 +183,8 @@ def planar_uvms_screws(
 
     Vehicle: ``[px, py, rz]`` through the vehicle origin (world axes, so its magnitudes are
     ``[x_dot, y_dot, psi_dot]``); arm: revolute z joints; virtual chain: ``[px, py, rz]`` centred at
-    the tip, magnitudes ``[x_E_dot, y_E_dot, psi_E_dot]``. Paper 001's simulation: 2 m links,
-    ``mount = (2.5, 0)`` m ahead of the vehicle centre.
+    the tip, magnitudes ``[x_E_dot, y_E_dot, psi_E_dot]``. The simulation of
+    dos Santos et al. (2006): 2 m links, ``mount = (2.5, 0)`` m ahead of the vehicle centre.
 
     Args:
         vehicle_pose: (3,) ``[x, y, psi]`` [m, m, rad].

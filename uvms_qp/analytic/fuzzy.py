@@ -1,4 +1,4 @@
-"""A small fuzzy system for paper 003's weights beta, alpha_1 and alpha_2 (a reconstruction).
+"""A small fuzzy system for Wang et al.'s (2017) weights beta, alpha_1, alpha_2 (a reconstruction).
 
 Wang et al. (2017) takes its fuzzy system from another work (its reference 19) and does
 not print the rule base. This module is this library's reconstruction, consistent with the text:

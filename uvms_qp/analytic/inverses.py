@@ -94,7 +94,8 @@ def weighted_pinv(
     Soylu et al. (2007), Eq. (17) and Wang et al. (2017), Eq. (12)-(13). It gives
     the solution of ``J x = b`` of least ``x^T W x`` (bigger weight, smaller motion). Computed
     as ``W^{-1/2} (J W^{-1/2})^+``: Eq. (17) for full row rank, and still defined otherwise.
-    Paper 003 specifies ``W^{-1}`` directly (Eq. 14, zeros allowed): pass ``inverse_weights``.
+    Wang et al. (2017) specify ``W^{-1}`` directly (Eq. 14, zeros allowed): pass
+    ``inverse_weights``.
 
     Args:
         J: (m, n) Jacobian.

@@ -95,7 +95,7 @@ def joint_limit_index(q: Any, lower: Any, upper: Any, C: Any = 1.0, *,
         q: (n,) joint angles [rad], strictly inside the limits when ``clearance`` is 0.
         lower: (n,) lower limits [rad].
         upper: (n,) upper limits [rad].
-        C: Positive constant(s) C_i, scalar or (n,) (paper 003: [10, 6, 10, 10, 10]).
+        C: Positive constant(s) C_i, scalar or (n,) (Wang et al., 2017: [10, 6, 10, 10, 10]).
         clearance: Fraction of each joint's range at which distances to a limit are clipped,
             in ``[0, 0.5)`` (0: exact).
 

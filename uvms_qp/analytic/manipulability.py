@@ -1,4 +1,4 @@
-"""Manipulability, its gradient, and paper 000's dexterous task priority with a shaping function."""
+"""Manipulability, its gradient, and Soylu et al.'s (2007) dexterous task priority."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def manipulability(J: Any) -> float:
     """Yoshikawa's measure ``rho = sqrt(det(J J^T)) = prod_i sigma_i``.
 
     Soylu et al. (2007), Eq. (18); Wang et al. (2017), Eq. (18). Zero when ``J``
-    has fewer columns than rows or loses row rank. For paper 000's collective Jacobian
+    has fewer columns than rows or loses row rank. For Soylu et al.'s (2007) collective Jacobian
     ``J_a = [J_p; J_s]`` with ``J_s = [I 0]`` (vehicle pose), ``rho(J_a)`` equals the
     manipulability of the arm columns of ``J_p`` alone (Schur complement).
 
@@ -97,7 +97,7 @@ def shaping_function(rho: Any, rho_bar: float) -> Any:
 
     Args:
         rho: Manipulability value(s) >= 0 (a number or an array).
-        rho_bar: Threshold > 0 (paper 000: 1.3).
+        rho_bar: Threshold > 0 (Soylu et al., 2007: 1.3).
 
     Returns:
         k in [0, 1], a float for a number, else an array of rho's shape.
@@ -169,9 +169,9 @@ def dexterous_task_priority(
         xs: (m2,) secondary rate reference.
         rho: Current manipulability of ``J_a = [Jp; Js]`` (Eq. 18).
         rho_gradient: (n,) ``d rho / d q`` (Eq. 19), zeros on the vehicle DOFs.
-        rho_bar: Threshold (paper 000: 1.3).
-        gain: lambda > 0 (paper 000: 10).
-        weights: Optional metric W (paper 000: ``diag(10, 10, 10, 1, 1, 1)``).
+        rho_bar: Threshold (Soylu et al., 2007: 1.3).
+        gain: lambda > 0 (Soylu et al., 2007: 10).
+        weights: Optional metric W (Soylu et al., 2007: ``diag(10, 10, 10, 1, 1, 1)``).
         rho_rate: Optional rho_dot; None predicts it with Eq. (20).
         rcond: Relative singular-value cut-off.
 

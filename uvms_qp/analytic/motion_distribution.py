@@ -22,10 +22,10 @@ def motion_distribution(
 
     ``w^{-1} = diag((1 - beta) w_max I_vehicle, beta I_arm)``: beta = 1 uses the arm only,
     beta = 0 the vehicle only. Pass the result as ``inverse_weights`` to the weighted schemes.
-    Paper 003 writes ``I_{6x6}``; its vehicle actuates 4 DOFs, so the block has ``n_vehicle``
-    entries. The optional ``joint_weights`` (Eq. 17, :func:`joint_limit_weights`) multiply the arm
-    block: the paper defines both as ``w^{-1}`` without saying how they combine; the product is
-    this library's reading.
+    Wang et al. (2017) write ``I_{6x6}``; their vehicle actuates 4 DOFs, so the block has
+    ``n_vehicle`` entries. The optional ``joint_weights`` (Eq. 17, :func:`joint_limit_weights`)
+    multiply the arm block: the paper defines both as ``w^{-1}`` without saying how they combine;
+    the product is this library's reading.
 
     Args:
         beta: Distribution factor in [0, 1].

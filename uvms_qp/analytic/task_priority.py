@@ -152,8 +152,8 @@ def singularity_robust_task_priority(
     kernel of the primary task: no algorithmic singularity, at the price of the secondary task not
     being met even when it could be. When the tasks do not conflict it equals Eq. (10).
     ``damping > 0`` uses the damped inverse ``J^*`` for both tasks (Section 2.5). With a metric W
-    both inverses are weighted (for paper 000's vehicle-pose secondary task ``J2 = [I 0]``, the
-    weighted and plain ``J2^+`` coincide for any diagonal W).
+    both inverses are weighted (for Soylu et al.'s (2007) vehicle-pose secondary task
+    ``J2 = [I 0]``, the weighted and plain ``J2^+`` coincide for any diagonal W).
 
     Args:
         J1: (m1, n) primary Jacobian.
@@ -186,7 +186,7 @@ def closed_loop_reference(xdot_d: Any, error: Any, gain: Any) -> FloatArray:
     Args:
         xdot_d: (m,) desired task rate.
         error: (m,) task error ``x_d - x``.
-        gain: K as a scalar, an (m,) diagonal (paper 000: ``K_p = [10, 10]``,
+        gain: K as a scalar, an (m,) diagonal (Soylu et al., 2007: ``K_p = [10, 10]``,
             ``K_s = [10, 10, 100]``) or an (m, m) matrix [1/s].
 
     Returns:
@@ -213,8 +213,8 @@ def sr_task_priority_closed_loop(
 ) -> FloatArray:
     """Closed-loop singularity-robust task priority (Soylu et al. (2007), Eq. (16)).
 
-    ``qdot = J1^+ (xdot1_d + K1 e1) + (I - J1^+ J1) J2^+ (xdot2_d + K2 e2)``; paper 000 uses the
-    weighted inverse with ``W = diag(10, 10, 10, 1, 1, 1)``, ``K1 = [10, 10]``,
+    ``qdot = J1^+ (xdot1_d + K1 e1) + (I - J1^+ J1) J2^+ (xdot2_d + K2 e2)``; Soylu et al. (2007)
+    use the weighted inverse with ``W = diag(10, 10, 10, 1, 1, 1)``, ``K1 = [10, 10]``,
     ``K2 = [10, 10, 100]``.
 
     Returns:

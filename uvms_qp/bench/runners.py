@@ -7,7 +7,7 @@ A :class:`Runner` turns one :class:`~uvms_qp.bench.sets.BenchProblem` into one
   (:class:`~uvms_qp.controller.Controller` on UVMS problems, :class:`~uvms_qp.hqp.HierarchySolver`
   on raw ones);
 * ``nullspace``: the closed-form recursive null-space scheme
-  (``000_7b5f597fe4e36aa4.txt, Eq. (10)``), on problems whose levels are all equalities;
+  (Soylu et al. (2007), Eq. (10)), on problems whose levels are all equalities;
 * ``weighted``: the same stack as ONE weighted QP (level ``k`` of ``p`` weighted by
   ``1e4 ** (p - 1 - k)``), solved by ``cascade:daqp`` (a plain QP: as soft weights of one DAQP
   level, the priority weights would span more orders than its soft-row regularisation resolves);

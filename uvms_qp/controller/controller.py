@@ -5,7 +5,7 @@
 buffers every tick) and hands it to one scheme (:mod:`~uvms_qp.controller.schemes`: ``"hqp"``,
 ``"weighted"``, ``"nullspace"``). ``metric`` is the diagonal W of the final regularisation
 ``min zeta' W zeta`` (e.g. :func:`uvms_qp.tasks.motion_distribution_weights`,
-``003_229789978cc4b235.txt, Eq. (14)``, or ``diag(10, 10, 10, 1, 1, 1)`` of paper 000).
+Wang et al. (2017), Eq. (14), or ``diag(10, 10, 10, 1, 1, 1)`` of Soylu et al. (2007)).
 """
 
 from __future__ import annotations

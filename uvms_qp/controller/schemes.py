@@ -15,7 +15,7 @@ guard and post-check (shape, finiteness, hard rows, deadline):
   ``priority_ratio ** (p - 1)``, far more than its soft-row regularisation resolves accurately);
   very large ratios make the QP ill-conditioned (1e2-1e4 work well);
 * :class:`NullspaceScheme` (``"nullspace"``): the closed-form recursive null-space scheme
-  (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p levels, in the metric W of Eq. (17)),
+  (Soylu et al. (2007), Eq. (10), extended to p levels, in the metric W of Eq. (17)),
   saturated into the hard box (``StepResult.saturated`` says when that changed the command);
   its status judges the saturated command against the levels (``unproven`` when the
   optimality certificate cannot prove it the optimum of the boxed problem: the command stays

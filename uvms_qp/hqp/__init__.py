@@ -4,8 +4,8 @@ Levels ``L_1 > ... > L_p`` of rows ``lo_k <= A_k x <= hi_k`` are solved in prior
 level minimising its weighted violation ``sum_i w_i s_i^2`` subject to the hard box and rows and to
 every higher level keeping the violation it reached; a final regularisation picks the minimum of
 ``x' W x`` (``W`` diagonal). With equality levels only, full-rank levels and no active bound the
-answer is the recursive null-space solution of ``000_7b5f597fe4e36aa4.txt, Eq. (10)`` in the
-metric ``W`` (weighted pseudoinverse, ``000_7b5f597fe4e36aa4.txt, Eq. (17)``).
+answer is the recursive null-space solution of Soylu et al. (2007), Eq. (10), in the
+metric ``W`` (weighted pseudoinverse, Soylu et al. (2007), Eq. (17)).
 
 The parts, each written once: :mod:`.problem` (the one stacked layout), :mod:`.validate` (user
 input into it), :mod:`.backends` (one file per back-end family), :mod:`.measure` (slacks,

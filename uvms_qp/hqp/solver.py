@@ -49,7 +49,7 @@ class HierarchySolver:
             ``"cascade:<qpsolvers name>"``).
         weights: Diagonal of the metric W of the final regularisation ``min x' W x``, shape (n,),
             positive; None for the identity (e.g. ``[10, 10, 10, 1, 1, 1]`` moves the arm rather
-            than the vehicle, ``000_7b5f597fe4e36aa4.txt, Eq. (17)``).
+            than the vehicle, Soylu et al. (2007), Eq. (17)).
         options: Back-end options. Common keys: ``level_tol`` (relative tolerance deciding that a
             level is met, default from the registry), ``hard_tol``, ``time_cap`` (cap of one
             solve [s] on :attr:`clock`, default none; a safe solver sets its own: a cascade

@@ -30,7 +30,7 @@ PAPER_003 = "Wang et al. (2017)"
 BLUEROV2_ALPHA5_MOUNT_FLU = {"xyz": (0.24, -0.099, 0.029), "rpy": (0.0, 0.0, 0.0)}
 #: Published maximum forward speed of the BlueROV2 [m/s]; other rates have no published figure.
 BLUEROV2_MAX_SURGE = 1.5
-#: Mount chosen for the wang_9dof arm (paper 003 gives none): 0.5 m ahead of and 0.3 m below
+#: Mount chosen for the wang_9dof arm (Wang et al. (2017) give none): 0.5 m ahead of and 0.3 m below
 #: the vehicle origin, arm base axes aligned with the FRD body axes.
 WANG_MOUNT = {"xyz": (0.5, 0.0, 0.3), "rpy": (0.0, 0.0, 0.0)}
 

@@ -33,7 +33,7 @@ from .wang import WangEuclideanProjection, WangFuzzyGradientProjection, WangPseu
 
 
 class NenchevSelfMotion(NenchevSingularityConsistent):
-    """Paper 002's second run: end-point motion and self-motion with equal weight (b_sm = 1)."""
+    """Nenchev and Tsumaki's second run: end-point and self-motion with equal weight (b_sm = 1)."""
 
     type_name = "nenchev_sc_self_motion"
 

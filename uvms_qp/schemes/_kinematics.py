@@ -3,7 +3,7 @@
 Thin adapters from a :class:`~uvms_qp.model.State` to the library's formulas: the arm
 manipulability and its exact gradient (Soylu et al. (2007), Eq. (18)-(19),
 Wang et al. (2017), Eq. (18)-(19); computed by
-:func:`uvms_qp.tasks.manipulability_and_gradient`) and paper 003's payload objective
+:func:`uvms_qp.tasks.manipulability_and_gradient`) and Wang et al.'s (2017) payload objective
 (Eq. (20)-(21), :mod:`uvms_qp.analytic.payload`). Gradients are returned over zeta, with zeros on
 the vehicle columns: neither quantity depends on the vehicle pose.
 """
@@ -28,8 +28,8 @@ def arm_manipulability(
     """Manipulability of the arm's position Jacobian and its gradient over zeta.
 
     ``rho = sqrt(det(J J^T))`` with ``J`` the world-axes position rows ``rows`` of ``frame`` over
-    the arm-joint columns (Eq. (18); for paper 000 it equals the measure of the collective
-    Jacobian ``J_a = [J_p; J_s]``, see :func:`uvms_qp.analytic.manipulability`).
+    the arm-joint columns (Soylu et al. (2007), Eq. (18); there it equals the measure of the
+    collective Jacobian ``J_a = [J_p; J_s]``, see :func:`uvms_qp.analytic.manipulability`).
 
     Args:
         state: Model state.

@@ -1,4 +1,4 @@
-"""Paper 002 (Nenchev, Tsumaki): the singularity-consistent (SC) method for the 4-DOF arm.
+"""Nenchev and Tsumaki: the singularity-consistent (SC) method for the 4-DOF arm.
 
 The column-augmented Jacobian ``H = [J, -v_hat]`` of the PA-10-like positioning arm has a
 two-dimensional kernel spanned by the self-motion field ``f_sm`` (no q4 rate, no path rate) and the

@@ -1,4 +1,4 @@
-"""Paper 001 (dos Santos, Guenther, Martins, De Pieri): kinematic constraints by virtual chains.
+"""dos Santos et al. (2006): kinematic constraints by virtual chains.
 
 Two schemes for a planar UVMS tracking a tool pose ``[x_E, y_E, psi_E]`` while the vehicle should
 stay at rest with its heading turned toward the current:

@@ -1,4 +1,4 @@
-"""Paper 000 (Soylu, Buckham, Podhorodeski): singularity-robust and dexterous task priority.
+"""Soylu et al. (2007): singularity-robust and dexterous task priority.
 
 Two schemes for a planar vehicle-manipulator whose primary task is the tool position
 ``x_p = [x_e, y_e]`` and whose secondary task holds the vehicle pose ``x_s = [x_v, y_v, psi_v]``:

@@ -1,4 +1,4 @@
-"""Paper 003 (Wang, Jiang, Yan, Gu, Chen): pseudoinverse and fuzzy multitask gradient projection.
+"""Wang et al. (2017): pseudoinverse and fuzzy multitask gradient projection.
 
 Two schemes for a UVMS whose task is the tool position (3 rows, world frame):
 

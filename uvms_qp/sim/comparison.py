@@ -11,7 +11,7 @@ Besides the simulator's metrics, the table reports a few that the papers' claims
 ``min_manipulability_time`` [s], ``joint_rate_max`` [rad/s], ``vehicle_speed_max`` [m/s],
 ``vehicle_yaw_final`` [rad], and ``tool_base_radius_max``/``_mean`` [m], the horizontal distance
 of the tool from the arm base z axis (``sqrt(x_E^2 + y_E^2)`` in the arm base frame): the payload
-moment per newton of ``003_229789978cc4b235.txt, Eq. (20)``.
+moment per newton of Wang et al. (2017), Eq. (20).
 
 The closed-form schemes are the papers' unconstrained resolutions: they ignore the scenario's hard
 bounds, while each of their steps reports status ``optimal`` (the formula was evaluated). A run

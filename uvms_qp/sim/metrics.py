@@ -14,7 +14,7 @@ commands for ``k = 0..N-1``), independently of the controller's own diagnostics:
 - ``payload_moment_max`` [N m]: largest moment of the payload about the arm base's vertical
   axis, ``F sqrt(x_E^2 + y_E^2)``, when a payload is set (``_start``/``_final`` too);
 - ``payload_objective_max`` [N m^2]: largest ``(x_E^2 + y_E^2) F``, the objective of
-  ``003_229789978cc4b235.txt``, Eq. (20), that a payload task bounds or reduces;
+  Wang et al. (2017), Eq. (20), that a payload task bounds or reduces;
 - ``step_time_median_us``, ``step_time_p99_us``: wall time of the controller step [us];
 - ``nan_steps``: steps whose command was not finite (replaced by zero);
 - ``status_counts``: steps per status; ``unproven_steps``: steps whose command is inside the hard

@@ -2,14 +2,14 @@
 
 - Manipulability: the measure of the stack's manipulability task (``task.compute_value(state)``,
   same frame and rows), otherwise Yoshikawa's measure ``w = sqrt(det(J J^T))``
-  (``000_7b5f597fe4e36aa4.txt, Eq. (18)``) of the tool's arm Jacobian in the arm-base frame,
+  (Soylu et al. (2007), Eq. (18)) of the tool's arm Jacobian in the arm-base frame,
   restricted to the rows a default :class:`~uvms_qp.tasks.ManipulabilityTask` uses (``x, y`` for
   planar vehicles, whose ``z`` row is zero; ``x, y, z`` otherwise).
   Its unit (the task's, else ``m^k`` for k position rows) and, for a task in mode ``"floor"``,
   the floor at each state.
 - Payload moment: ``M = (x_E^2 + y_E^2) F`` with ``(x_E, y_E)`` the tool position in the arm-base
   frame [m] and ``F`` the payload force [N] currently set on the payload task
-  (``003_229789978cc4b235.txt, Eq. (20)``; [N m^2] as in the paper), through the task's
+  (Wang et al. (2017), Eq. (20); [N m^2] as in the paper), through the task's
   ``compute_value(state)``.
 - Tool tracking: the tracked task's frame pose and its target (``task.target(t)``).
 - Heading: the target heading of a current-alignment task (``heading + offset``), else the

@@ -69,7 +69,8 @@ class SimulationResult:
         target_position: Its target (N+1, 3) [m] (NaN where none).
         manipulability: Manipulability measure (N+1,).
         payload_moment: Payload moment F |(x_E, y_E)| (N+1,) [N m], or None without a payload task.
-        payload_objective: Paper 003 Eq. (20) objective (x_E^2 + y_E^2) F (N+1,) [N m^2], or None.
+        payload_objective: Payload objective (x_E^2 + y_E^2) F of Wang et al. (2017), Eq. (20),
+            (N+1,) [N m^2], or None.
         step_time: Controller step wall time (N,) [s].
         status: Controller status per step.
         level_residuals: Per-level residual norms (N, levels) (NaN where not reported).

@@ -254,13 +254,13 @@ class QuinticTrajectory(_FixedProfileSegment):
 
 
 class LineTrajectory(_FixedProfileSegment):
-    """Straight line at constant speed (as in the straight-line runs of paper 002, Section 4)."""
+    """Straight line at constant speed (Nenchev and Tsumaki's straight-line runs, Section 4)."""
 
     _profile = "linear"
 
 
 class CircleTrajectory(Trajectory):
-    """Circle at constant angular rate in a plane (paper 001's reference: 1 m diameter, 2 turns).
+    """Circle at constant angular rate in a plane (dos Santos et al. (2006): 1 m diameter, 2 turns).
 
     ``p(t) = c + r (cos(a) e1 + sin(a) e2)``, ``a = a0 + 2 pi n t / T``, with ``e1``, ``e2`` an
     orthonormal basis of the plane whose normal is ``normal`` (positive turns are counter-clockwise

@@ -19,11 +19,11 @@ _TWO_PI = 2.0 * math.pi
 
 
 class CurrentAlignmentTask(ErrorTask):
-    r"""Align the vehicle heading ``psi`` with the current direction (``001_0fa6eac0390842e0.txt``).
+    r"""Align the vehicle heading ``psi`` with the current direction (dos Santos et al. (2006)).
 
-    Paper 001 imposes the vehicle rates so that the vehicle stays aligned with the ocean current
-    (its simulation: current at 0.78 rad), which saves energy. As a task its priority is the
-    user's choice. One row:
+    dos Santos et al. (2006) impose the vehicle rates so that the vehicle stays aligned with the
+    ocean current (their simulation: current at 0.78 rad), which saves energy. As a task its
+    priority is the user's choice. One row:
 
         J_psi zeta = K wrap(psi_c + offset - psi),
 

@@ -44,7 +44,7 @@ def _skew(r: FloatArray) -> FloatArray:
 class EndEffectorTask(ErrorTask):
     r"""Track the position, orientation or full pose of a frame, on any subset of world axes.
 
-    Closed-loop inverse kinematics (``000_7b5f597fe4e36aa4.txt, Eq. (16)``), in world axes:
+    Closed-loop inverse kinematics (Soylu et al. (2007), Eq. (16)), in world axes:
 
     * position rows:  ``J_p zeta = p_dot_d + K (p_d - p)``, error [m], rows [m/s];
     * orientation rows: with ``R_e = R_d R^T`` and ``e_o = log(R_e)`` (SO(3) log map, world axes,

@@ -1,4 +1,4 @@
-"""Joint limits as a task: paper 003's index as a gradient objective, or a margin inequality."""
+"""Joint-limit task: Wang et al.'s (2017) index as a gradient objective, or a margin inequality."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ class JointLimitTask(Task):
 
     * ``"gradient"``: rows ``qdot_S = -lambda grad H`` (one per joint with finite limits,
       [rad/s]), the gradient-projection use of the index ``H`` of
-      ``003_229789978cc4b235.txt, Eq. (15)-(16)`` (see
+      Wang et al. (2017), Eq. (15)-(16) (see
       :func:`~uvms_qp.analytic.joint_limit_index`); with
       ``normalize=True`` the gradient is divided by its norm (Eq. (11)). For joints at (or
       beyond) a limit, or closer to it than 1 % of their range, the distance to that limit

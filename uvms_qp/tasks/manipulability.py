@@ -136,7 +136,7 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
     r"""Yoshikawa's measure of a serial arm Jacobian and its exact gradient over the joints.
 
     ``w = sqrt(det(J_S J_S^T))`` (``sqrt(det(J_S^T J_S))`` when ``J_S`` has more rows than columns),
-    ``000_7b5f597fe4e36aa4.txt, Eq. (18)``, with ``J_S`` the selected rows of the twist Jacobian
+    Soylu et al. (2007), Eq. (18), with ``J_S`` the selected rows of the twist Jacobian
     ``J6 = [V; W]`` (6, n) of the arm (columns in chain order, revolute or prismatic joints, any
     fixed reference frame). Its gradient (Eq. (19)) is
     ``dw/dq_i = w trace(dJ_S/dq_i J_S^+)``, evaluated with the exact column derivatives of a
@@ -203,7 +203,7 @@ class ManipulabilityTask(Task):
     r"""Keep the arm dexterous using Yoshikawa's manipulability ``w`` of the arm Jacobian.
 
     ``w = sqrt(det(J_S J_S^T))`` of the selected rows ``S`` of the arm's Jacobian of ``frame`` in
-    the arm-base axes (joint columns only; ``000_7b5f597fe4e36aa4.txt, Eq. (18)``; in paper 000
+    the arm-base axes (joint columns only; Soylu et al. (2007), Eq. (18); in that paper
     the measure of the collective Jacobian ``[J_p; J_s]`` reduces to this one since ``J_s``
     selects the vehicle coordinates). ``grad w`` (Eq. (19)) is exact (see
     :func:`manipulability_and_gradient`). Modes:

@@ -1,4 +1,4 @@
-"""Payload moment: reduce, or bound, the moment a payload exerts through the arm (paper 003)."""
+"""Payload moment (Wang et al., 2017): reduce, or bound, the moment a payload exerts via the arm."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
 class PayloadMomentTask(Task):
     r"""Keep the payload moment ``M(q) = (x_E^2 + y_E^2) F`` small.
 
-    ``003_229789978cc4b235.txt, Eq. (20)``: ``(x_E, y_E)`` is the position of ``frame`` in the
+    Wang et al. (2017), Eq. (20): ``(x_E, y_E)`` is the position of ``frame`` in the
     arm-base frame [m], ``F`` the (vertical) payload force [N]; ``M`` is in [N m^2] as in the
     paper (the squared lever arm times the force; it grows with the moment the payload exerts
     on the vehicle). Gradient (Eq. (21)):

@@ -31,7 +31,7 @@ class StationKeepingTask(ErrorTask):
     The set point is ``target`` (values for the selected coordinates, in order), or, when None:
     ``hold="activation"`` (default) the pose at the first evaluation after construction or
     :meth:`reset`; ``hold="current"`` the pose at every tick, so the rows ask for zero vehicle
-    motion, as in ``000_7b5f597fe4e36aa4.txt``, Section 3 ("the current URV position value is
+    motion, as in Soylu et al. (2007), Section 3 ("the current URV position value is
     entered as the desired position values for the next step").
 
     Args:
@@ -46,8 +46,8 @@ class StationKeepingTask(ErrorTask):
             coordinates (position, Z-Y-X Euler angles) are held.
         hold: ``"activation"`` or ``"current"`` when no target is given.
         blend: Name of a :class:`~uvms_qp.tasks.ManipulabilityTask` in mode ``"shaping"`` of the
-            same stack: the demand is scaled by ``1 - k(w)`` (``000_7b5f597fe4e36aa4.txt,
-            Eq. (21)``: station keeping gives way to singularity avoidance as ``w`` drops).
+            same stack: the demand is scaled by ``1 - k(w)`` (Soylu et al. (2007),
+            Eq. (21): station keeping gives way to singularity avoidance as ``w`` drops).
         gain: Gain K [1/s], scalar or per coordinate.
         weight: Weight within the level.
         name: Task name (default ``"station_keeping"``).

@@ -12,7 +12,7 @@ evaluation:
 
       J zeta = x_dot_d + K e,
 
-  the closed-loop form of ``000_7b5f597fe4e36aa4.txt, Eq. (16)``;
+  the closed-loop form of Soylu et al. (2007), Eq. (16);
 * other tasks (set-based rows, objectives) implement :meth:`Task.evaluate` ``-> (J, lower,
   upper)``.
 
@@ -371,7 +371,7 @@ class Task(ABC):
 class ErrorTask(Task):
     """A task regulating an error ``e = x_d - x`` with gain ``K`` [1/s].
 
-    Rows: ``J zeta = x_dot_d + K e`` (``000_7b5f597fe4e36aa4.txt, Eq. (16)``), where ``J`` is the
+    Rows: ``J zeta = x_dot_d + K e`` (Soylu et al. (2007), Eq. (16)), where ``J`` is the
     Jacobian of ``x`` over zeta and ``x_dot_d`` the feed-forward rate of the target. Subclasses
     implement :meth:`error_rows` only.
 

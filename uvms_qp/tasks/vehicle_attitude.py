@@ -25,7 +25,7 @@ class VehicleAttitudeTask(ErrorTask):
     vehicle-pose Jacobian, Euler-angle rates). Only for vehicles that actuate the matching body
     rates (``p`` for roll, ``q`` for pitch): binding to a vehicle with passive roll/pitch is an
     error (those angles are then governed by the vehicle's restoring moments, see
-    ``003_229789978cc4b235.txt``, and kept small through the payload-moment task instead).
+    Wang et al. (2017), and are kept small through the payload-moment task instead).
 
     Args:
         axes: ``["phi", "theta"]`` (default) or one of them.

@@ -1,4 +1,4 @@
-"""Vehicle motion minimisation with the motion distribution of paper 003."""
+"""Vehicle motion minimisation with the motion distribution of Wang et al. (2017)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def motion_distribution_weights(model: Any, beta: float = 0.5, w_max: float = 1.0) -> FloatArray:
-    r"""Diagonal metric ``W`` (nv,) of the motion distribution of ``003_229789978cc4b235.txt``.
+    r"""Diagonal metric ``W`` (nv,) of the motion distribution of Wang et al. (2017).
 
     Eq. (14) gives the inverse weights ``w^{-1} = diag((1 - beta) w_max I_v, beta I_n)``, so
     ``W = diag(1 / ((1 - beta) w_max) I_v, 1 / beta I_n)``: a large ``beta`` makes vehicle motion
@@ -39,9 +39,9 @@ def motion_distribution_weights(model: Any, beta: float = 0.5, w_max: float = 1.
 
 
 class VehicleMotionTask(Task):
-    r"""Minimise vehicle motion, weighted by the motion distribution of paper 003.
+    r"""Minimise vehicle motion, weighted by the motion distribution of Wang et al. (2017).
 
-    Rows ``zeta_i = 0`` with per-row weights from ``003_229789978cc4b235.txt, Eq. (14)``: vehicle
+    Rows ``zeta_i = 0`` with per-row weights from Wang et al. (2017), Eq. (14): vehicle
     rows weigh ``1 / ((1 - beta) w_max)``, arm rows ``1 / beta`` (the level then minimises
     ``zeta' W zeta``, the metric of the paper's weighted pseudoinverse, Eq. (12)-(13)). With
     ``include_arm=False`` only the vehicle rows are emitted (all weight 1). Rows [m/s, rad/s].

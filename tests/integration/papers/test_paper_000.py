@@ -1,4 +1,4 @@
-"""Paper 000 (Soylu et al.): Eq. (16) falls into the arm singularity, Eq. (21) and HQP do not.
+"""Soylu et al. (2007): Eq. (16) falls into the arm singularity, Eq. (21) and HQP do not.
 
 Claims of Soylu et al. (2007), Sections 3 and 4.4, as numbers on the bundled scenario
 ``paper000_quintic`` (set-up and chosen duration: docs/papers/000_soylu.md).

@@ -1,4 +1,4 @@
-"""Paper 001 (dos Santos et al.): kinematic constraints keep the vehicle at rest, Eq. (28) does not.
+"""dos Santos et al. (2006): kinematic constraints keep the vehicle at rest, Eq. (28) does not.
 
 Claims of dos Santos et al. (2006), Simulation Results, on the bundled scenarios
 ``paper001_circle`` (tool task above vehicle rest and heading) and

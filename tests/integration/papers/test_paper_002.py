@@ -1,4 +1,4 @@
-"""Paper 002 (Nenchev, Tsumaki): SC natural motion through the extended-arm singularity.
+"""Nenchev and Tsumaki: SC natural motion through the extended-arm singularity.
 
 Claims of Nenchev and Tsumaki, "Redundancy resolution based on the singularity-consistent
 method", Sections 3 and 4, on the bundled scenarios ``paper002_line_constant_arm_angle`` (run 1

@@ -1,4 +1,4 @@
-"""Paper 003 (Wang et al.): fuzzy weighted gradient projection vs pseudoinverse, with a payload.
+"""Wang et al. (2017): fuzzy weighted gradient projection vs pseudoinverse, with a payload.
 
 Claims of Wang et al. (2017), Simulation results, on the bundled scenarios
 ``paper003_case1_no_payload``, ``paper003_case2_pseudoinverse`` and ``paper003_case3_payload``;

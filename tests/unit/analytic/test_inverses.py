@@ -29,7 +29,7 @@ def test_weighted_pinv_equals_closed_form_of_eq17(seed, m, extra):
     Winv = np.diag(1.0 / w)
     expected = Winv @ J.T @ np.linalg.inv(J @ Winv @ J.T)
     assert np.allclose(weighted_pinv(J, w), expected, atol=1e-8)
-    # same metric given as a full matrix and as the inverse diagonal (paper 003's form)
+    # same metric given as a full matrix and as the inverse diagonal (Wang et al.'s (2017) form)
     assert np.allclose(weighted_pinv(J, np.diag(w)), expected, atol=1e-8)
     assert np.allclose(weighted_pinv(J, inverse_weights=1.0 / w), expected, atol=1e-8)
 

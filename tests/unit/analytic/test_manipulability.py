@@ -23,7 +23,8 @@ def two_link_jacobian(q, l1=1.0, l2=1.0):
 
 
 def planar_uvms_position_jacobian(q):
-    """Paper 000's planar UVMS: q = [x, y, psi, q1, q2, q3], r = l = 1 m, x_p = [x_e, y_e]."""
+    """Soylu et al.'s (2007) planar UVMS: q = [x, y, psi, q1, q2, q3], r = l = 1 m,
+    x_p = [x_e, y_e]."""
     psi = q[2]
     a = psi + np.cumsum(q[3:])
     J = np.zeros((2, 6))
@@ -56,7 +57,7 @@ def test_manipulability_gradient_matches_finite_differences(seed):
 
 
 def test_collective_jacobian_manipulability_equals_arm_manipulability():
-    # paper 000: J_a = [J_p; J_s], J_s = [I 0]  ->  rho(J_a) = rho(arm columns of J_p)
+    # Soylu et al. (2007): J_a = [J_p; J_s], J_s = [I 0]  ->  rho(J_a) = rho(arm columns of J_p)
     q = np.array([0.3, -0.2, 0.5, np.pi / 3, -np.pi / 3, np.pi / 3])
     Jp = planar_uvms_position_jacobian(q)
     J_a = np.vstack([Jp, np.eye(3, 6)])

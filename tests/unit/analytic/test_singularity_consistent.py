@@ -134,8 +134,8 @@ def test_sc_validation():
 
 
 def test_natural_motion_crosses_extended_arm_singularity_on_the_line():
-    # paper 002, run 1: start (0, 0, 0, -90) deg, v_hat = (1, 0, 0), b_sm = 0. With the printed
-    # Jacobian, f_ep5 = S4 = -1 at the start, so b_ep = -1 moves the wrist toward +x first.
+    # Nenchev and Tsumaki, run 1: start (0, 0, 0, -90) deg, v_hat = (1, 0, 0), b_sm = 0. With the
+    # printed Jacobian, f_ep5 = S4 = -1 at the start, so b_ep = -1 moves the wrist toward +x first.
     q = np.deg2rad([0.0, 0.0, 0.0, -90.0])
     v = [1.0, 0.0, 0.0]
     dt = 0.005

@@ -101,7 +101,7 @@ def test_sr_matches_eq15_formula_with_weights():
 
 
 def test_paper000_closed_loop_with_selection_secondary():
-    # paper 000 set-up: q = [x, y, psi, q1, q2, q3], J_s = [I 0], W = diag(10,10,10,1,1,1)
+    # Soylu et al. (2007) set-up: q = [x, y, psi, q1, q2, q3], J_s = [I 0], W = diag(10,10,10,1,1,1)
     rng = np.random.default_rng(2)
     Jp = rng.normal(size=(2, 6))
     Js = np.hstack([np.eye(3), np.zeros((3, 3))])

@@ -207,8 +207,8 @@ def test_controller_rejects_bad_input(rov):
 
 
 def test_shaping_level_reproduces_eq21_on_the_planar_urvm():
-    """Paper 000, Eq. (21), unweighted, no bounds: tracking level + [station keeping blended by
-    (1 - k); manipulability shaping] level equals the closed form
+    """Soylu et al. (2007), Eq. (21), unweighted, no bounds: tracking level + [station keeping
+    blended by (1 - k); manipulability shaping] level equals the closed form
     J_p^+ (x_dot + K_p e_p) + (I - J_p^+ J_p)((1 - k) J_s^+ K_s e_s + k s lambda grad rho)."""
     model = load_model("soylu_planar")
     q = model.configuration([0.1, -0.2, 0.3], [np.pi / 3, -np.pi / 3, np.pi / 3])

@@ -1,4 +1,4 @@
-"""Paper 001's screw/Davies construction against the model's kinematics."""
+"""dos Santos et al.'s (2006) screw/Davies construction against the model's kinematics."""
 
 import numpy as np
 import pytest

@@ -1,6 +1,6 @@
 """JointLimitTask gradient form at, just inside and just outside the joint limits.
 
-The exact index of ``003_229789978cc4b235.txt, Eq. (15)-(16)`` is infinite at a limit; the task
+The exact index of Wang et al. (2017), Eq. (15)-(16), is infinite at a limit; the task
 saturates it (distances clipped at 1 % of the range). Rows must stay finite and bounded, keep the
 direction of the exact gradient, and equal it away from the limits; every back-end must then
 solve a stack holding such rows.

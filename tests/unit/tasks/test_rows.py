@@ -2,10 +2,10 @@
 
 The reference side uses Pinocchio directly on a fresh ``Data`` (no :class:`State` caches) and
 numpy: frame poses and world-aligned Jacobians restricted to the columns of zeta, the Z-Y-X
-Euler angles of the vehicle, Fossen's ``J_eta`` (``003_229789978cc4b235.txt, Eq. (2)-(3)``),
+Euler angles of the vehicle, Fossen's ``J_eta`` (Wang et al. (2017), Eq. (2)-(3)),
 the SO(3) log and its Jacobian, Yoshikawa's measure with the trace form of its gradient
-(``000_7b5f597fe4e36aa4.txt, Eq. (18)-(19)``), the joint-limit index
-(``003_229789978cc4b235.txt, Eq. (15)-(16)``) and the payload moment (Eq. (20)-(21)). Tasks run
+(Soylu et al. (2007), Eq. (18)-(19)), the joint-limit index
+(Wang et al. (2017), Eq. (15)-(16)) and the payload moment (Eq. (20)-(21)). Tasks run
 over several ticks, so run-time memory (activation set points, ``w_dot``) is covered too.
 Also: the per-instance units of the rows and errors.
 """

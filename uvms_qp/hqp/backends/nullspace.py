@@ -1,7 +1,7 @@
 """Closed-form recursive null-space solution of an equality hierarchy in the metric W.
 
 The Siciliano-Slotine recursion extends the two-task priority formula of
-``000_7b5f597fe4e36aa4.txt, Eq. (10)``,
+Soylu et al. (2007), Eq. (10):
 ``zeta = J1^# x1_dot + (J2 N1)^# (x2_dot - J2 J1^# x1_dot)``, ``N1 = I - J1^# J1``,
 to p levels. With ``u = W^(1/2) x``, ``Ã_k = D_k A_k W^(-1/2)`` and ``b̃_k = D_k b_k``
 (``D_k = diag(sqrt(w_k))`` the row weights):
@@ -11,7 +11,7 @@ to p levels. With ``u = W^(1/2) x``, ``Ã_k = D_k A_k W^(-1/2)`` and ``b̃_k = D
     P_k = P_{k-1} - (Ã_k P_{k-1})^+ (Ã_k P_{k-1})
     x   = W^(-1/2) u_p
 
-which is the weighted-pseudoinverse form (``000_7b5f597fe4e36aa4.txt, Eq. (17)``) at every level.
+which is the weighted-pseudoinverse form (Soylu et al. (2007), Eq. (17)) at every level.
 Each level gets the weighted least-squares optimum inside the null space of the levels above, and
 the result has minimum ``x' W x`` among the lexicographic optima. Inequality levels are refused;
 the hard box and rows are only checked, never enforced.
@@ -52,8 +52,8 @@ def nullspace_solve(problem: Problem, rcond: float = 1e-10, atol: float = 0.0,
                     damping: float = DAMPING) -> tuple[FloatArray, tuple[int, ...]]:
     r"""Recursive null-space solution of an equality hierarchy in the metric W (no checks).
 
-    The recursion of the module docstring (``000_7b5f597fe4e36aa4.txt, Eq. (10)`` extended to p
-    levels, weighted pseudoinverse of ``000_7b5f597fe4e36aa4.txt, Eq. (17)``). The rank of each
+    The recursion of the module docstring (Soylu et al. (2007), Eq. (10), extended to p
+    levels, weighted pseudoinverse of their Eq. (17)). The rank of each
     projected block ``M_k = Ã_k P_{k-1}`` is decided against the level's *unprojected* size
     ``nu_k = |Ã_k|_F``: singular values ``sigma_i(M_k) <= max(atol, rcond * nu_k)`` are dropped.
     ``P_{k-1}`` is a projector (entries of order 1), so when the levels above have used up all
