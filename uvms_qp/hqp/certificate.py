@@ -253,8 +253,7 @@ class _Polar:
 
     def __init__(self, problem: Problem, k: int, binding: DaqpBinding, work: _Work) -> None:
         n, head = problem.n, problem.head
-        self.start = start = problem.spans[k][0]
-        end = problem.spans[k][1]
+        start, end = problem.spans[k]
         self.f = np.zeros(n)
         self.B = np.empty((2, start))
         self.B[0], self.B[1] = -_INF, _INF
@@ -316,7 +315,7 @@ class _Work:
 
     def __init__(self, problem: Problem, freeze_tol: float) -> None:
         n, p, head, M = problem.n, len(problem.sizes), problem.head, problem.M
-        self.m = m = problem.spans[-1][0]
+        m = problem.spans[-1][0]
         self.rows = problem.A[:m]
         self.lo, self.hi = problem.lo[:m], problem.hi[:m]
         self.y = np.empty(m)  # A x

@@ -337,7 +337,7 @@ class _Active:
     Which rows it stacks, which levels each test covers, and its buffers.
     """
 
-    __slots__ = ("both", "column", "counts", "diag", "fit", "fit_active", "fit_sides", "floored",
+    __slots__ = ("both", "column", "diag", "fit", "fit_active", "fit_sides", "floored",
                  "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "norms", "rows",
                  "tall", "tall_diag", "unit", "used")
 
@@ -346,7 +346,7 @@ class _Active:
         p = len(spans)
         act = active.tolist()
         self.mh = mh
-        self.counts = counts = [sum(act[a:b]) for a, b in spans]  # active rows per level
+        counts = [sum(act[a:b]) for a, b in spans]  # active rows per level
         fit, used = 0, mh  # the levels whose active rows, with those above, fit in n rows
         while fit < p and used + counts[fit] <= n:
             used += counts[fit]
