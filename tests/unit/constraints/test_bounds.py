@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from uvms_qp import UvmsQpError
+from tests.support.culprit import assert_names_culprit, bad_cases
 from uvms_qp.constraints import (
     CONSTRAINT_TYPES,
     Constraint,
@@ -206,10 +206,6 @@ BAD_CONSTRAINTS = [
 ]
 
 
-@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_CONSTRAINTS],
-                         ids=[c[0] for c in BAD_CONSTRAINTS])
+@pytest.mark.parametrize("build, error, fragment", bad_cases(BAD_CONSTRAINTS))
 def test_bad_constraint_argument_is_raised_with_its_culprit(rov, build, error, fragment):
-    with pytest.raises(error) as info:
-        build(rov)
-    assert isinstance(info.value, UvmsQpError)
-    assert fragment in str(info.value)
+    assert_names_culprit(build, error, fragment, rov)

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.support.culprit import assert_names_culprit, bad_cases
 from uvms_qp import UvmsQpError
 from uvms_qp.bench.stacks import demo_stack
 from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
@@ -48,13 +49,9 @@ BAD_CONTROLLER = [
 ]
 
 
-@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_CONTROLLER],
-                         ids=[c[0] for c in BAD_CONTROLLER])
+@pytest.mark.parametrize("build, error, fragment", bad_cases(BAD_CONTROLLER))
 def test_bad_controller_argument_is_raised_with_its_culprit(rov, build, error, fragment):
-    with pytest.raises(error) as info:
-        build(rov)
-    assert isinstance(info.value, UvmsQpError)
-    assert fragment in str(info.value)
+    assert_names_culprit(build, error, fragment, rov)
 
 
 @pytest.mark.parametrize(("kwargs", "name"), [

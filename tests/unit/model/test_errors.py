@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.support.culprit import assert_names_culprit, bad_cases
 from uvms_qp import (
     InputError,
     Model,
@@ -15,7 +16,6 @@ from uvms_qp import (
     UnknownFrameError,
     UnknownModelError,
     UnknownNameError,
-    UvmsQpError,
     load_model,
 )
 from uvms_qp.model import DHRow, Vehicle
@@ -377,10 +377,6 @@ BAD_MODEL = [
 ]
 
 
-@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_MODEL],
-                         ids=[c[0] for c in BAD_MODEL])
+@pytest.mark.parametrize("build, error, fragment", bad_cases(BAD_MODEL))
 def test_bad_configuration_is_raised_with_its_culprit(rov, build, error, fragment):
-    with pytest.raises(error) as info:
-        build(rov)
-    assert isinstance(info.value, UvmsQpError)
-    assert fragment in str(info.value)
+    assert_names_culprit(build, error, fragment, rov)

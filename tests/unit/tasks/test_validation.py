@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from uvms_qp import UvmsQpError
+from tests.support.culprit import assert_names_culprit, bad_cases
 from uvms_qp.analytic import LIMIT_CLEARANCE, joint_limit_gradient
 from uvms_qp.errors import (
     InputError,
@@ -460,10 +460,6 @@ BAD_TASKS = [
 ]
 
 
-@pytest.mark.parametrize("build, error, fragment", [c[1:] for c in BAD_TASKS],
-                         ids=[c[0] for c in BAD_TASKS])
+@pytest.mark.parametrize("build, error, fragment", bad_cases(BAD_TASKS))
 def test_bad_task_argument_is_raised_with_its_culprit(rov, build, error, fragment):
-    with pytest.raises(error) as info:
-        build(rov)
-    assert isinstance(info.value, UvmsQpError)
-    assert fragment in str(info.value)
+    assert_names_culprit(build, error, fragment, rov)
