@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from uvms_qp import load_model
+from uvms_qp.analytic.singularity_consistent import sc_arm_jacobian
 from uvms_qp.model.bundled import WANG_MOUNT
 
 
@@ -71,49 +72,17 @@ def test_nenchev_wrist_centre_002_section_4():
     assert model.frame_pose(q, "tool")[:3, 3] == pytest.approx([1.0, 0.0, 1.0], abs=1e-12)
 
 
-def _nenchev_jacobian(q, d3=1.0, d5=1.0):
-    """Nenchev and Tsumaki, Section 3: the printed entries j11 .. j34.
-
-    j11 is printed with ``d5 (C4 S2 + ...)``; the other eleven entries (and the finite-difference
-    derivative of the position they integrate to) need ``d5 (S1 C4 S2 + ...)``: a typo in the
-    text, corrected here (see docs/models.md).
-    """
-    C1, C2, C3, C4 = np.cos(q)
-    S1, S2, S3, S4 = np.sin(q)
-    return np.array(
-        [
-            [
-                d3 * S1 * S2 + d5 * (S1 * C4 * S2 + (C2 * C3 * S1 + C1 * S3) * S4),
-                -d3 * C1 * C2 + d5 * (C1 * C3 * S2 * S4 - C1 * C2 * C4),
-                d5 * (C3 * S1 + C1 * C2 * S3) * S4,
-                d5 * (C4 * (S1 * S3 - C1 * C2 * C3) + C1 * S2 * S4),
-            ],
-            [
-                -d3 * C1 * S2 + d5 * ((S1 * S3 - C1 * C2 * C3) * S4 - C1 * C4 * S2),
-                -d3 * C2 * S1 - d5 * (C2 * C4 * S1 - C3 * S1 * S2 * S4),
-                -d5 * (C1 * C3 - C2 * S1 * S3) * S4,
-                -d5 * (C4 * (C2 * C3 * S1 + C1 * S3) - S1 * S2 * S4),
-            ],
-            [
-                0.0,
-                -d3 * S2 - d5 * (C4 * S2 + C2 * C3 * S4),
-                d5 * S2 * S3 * S4,
-                -d5 * (C3 * C4 * S2 + C2 * S4),
-            ],
-        ]
-    )
-
-
 def test_nenchev_jacobian_matches_the_printed_entries():
-    # an independent closed form for 11 of the 12 entries; j11 corrected as documented above
+    # the printed entries j11 .. j34 (Nenchev and Tsumaki, Section 3; j11's typo corrected, see
+    # docs/models.md), checked against finite differences in tests/unit/analytic
     model = load_model("nenchev_pa10_arm")
     rng = np.random.default_rng(2)
     for _ in range(20):
         joints = rng.uniform(-math.pi, math.pi, 4)
         state = model.state(model.configuration([], joints))
         np.testing.assert_allclose(
-            state.jacobian("tool", rows="position"), _nenchev_jacobian(joints), atol=1e-12
+            state.jacobian("tool", rows="position"), sc_arm_jacobian(joints), atol=1e-12
         )
         np.testing.assert_allclose(
-            state.arm_jacobian("tool", rows="position"), _nenchev_jacobian(joints), atol=1e-12
+            state.arm_jacobian("tool", rows="position"), sc_arm_jacobian(joints), atol=1e-12
         )
