@@ -224,6 +224,22 @@ def test_manipulability_gradient_equals_the_trace_formula_for_any_row_sequence(n
         np.testing.assert_allclose(g / scale, g_ref / scale, atol=1e-9)
 
 
+@pytest.mark.parametrize("rows", [None, [0, 1], (3, 4, 5), range(6)])
+def test_manipulability_at_a_rank_deficient_jacobian_matches_the_trace_formula(rows):
+    """A singular ``J_S`` (w = 0: the closed forms give way to the pseudoinverse) stays finite."""
+    model = load_model("bluerov2_heavy_alpha5")
+    rng = np.random.default_rng(3)
+    ref_rows = [0, 1, 2] if rows is None else list(rows)
+    for _ in range(5):
+        J6 = np.array(model.state(model.random_configuration(rng)).arm_jacobian("tool"))
+        J6[list(ref_rows)[-1]] = J6[list(ref_rows)[0]]  # two selected rows equal: rank deficient
+        w, g = manipulability_and_gradient(J6, rows)
+        w_ref, g_ref = reference_manipulability(J6, ref_rows)
+        assert np.isfinite(g).all()
+        assert w == pytest.approx(w_ref, abs=1e-7)
+        np.testing.assert_allclose(g, g_ref, atol=1e-7)
+
+
 def test_tuple_rows_select_rows_not_an_element():
     model = load_model("wang_9dof")
     J6 = np.array(model.state(model.random_configuration(9)).arm_jacobian("tool"))

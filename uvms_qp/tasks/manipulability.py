@@ -17,118 +17,107 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 
-def _scaled_pinv_t(Js: FloatArray) -> tuple[float, FloatArray]:
-    """Return ``(w, w (J_S^+)^T)`` with ``w = sqrt(det(J_S J_S^T))`` (or of ``J_S^T J_S``).
+def _scaled_pinv_columns(J6: FloatArray, cols: list[list[float]], sel: list[int]
+                         ) -> tuple[float, list[list[float]]]:
+    """``(w, columns of P6)`` with ``P6`` the rows ``sel`` of ``w (J_S^+)^T``, zero elsewhere.
 
-    Small full-row-rank cases (2 or 3 rows) use the adjugate in plain floats, which avoids the
-    per-call overhead of LAPACK on tiny matrices: ``w G^{-1} = adj(G) / w``.
+    ``w = sqrt(det(J_S J_S^T))`` (or of ``J_S^T J_S``), ``J_S`` the rows ``sel`` of ``J6``
+    (``cols`` are its columns as plain floats). Two or three rows of full rank (the default
+    selections) take the adjugate in plain floats, ``w G^{-1} = adj(G) / w`` with
+    ``G = J_S J_S^T``: LAPACK's per-call overhead exceeds the work on such tiny matrices. A
+    (nearly) singular ``G`` and any other number of rows go through LAPACK (a pseudoinverse
+    when singular).
     """
-    k, n = Js.shape
+    n, k = len(cols), len(sel)
     if k == 3 and n >= 3:
-        (a, b, c), (_, d, e), (_, _, f) = (Js @ Js.T).tolist()
+        i, j, l = sel
+        a = b = c = d = e = f = 0.0
+        for col in cols:
+            x, y, z = col[i], col[j], col[l]
+            a += x * x
+            b += x * y
+            c += x * z
+            d += y * y
+            e += y * z
+            f += z * z
         A0, A1, A2 = d * f - e * e, c * e - b * f, b * e - c * d
+        A4, A5, A8 = a * f - c * c, b * c - a * e, a * d - b * b
         det = a * A0 + b * A1 + c * A2
         if det > 1e-24:
             w = math.sqrt(det)
-            adj = np.array(((A0, A1, A2), (A1, a * f - c * c, b * c - a * e),
-                            (A2, b * c - a * e, a * d - b * b)))
-            return w, (adj @ Js) / w
+            s = 1.0 / w
+            out = []
+            for col in cols:
+                x, y, z = col[i], col[j], col[l]
+                p = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+                p[i] = (A0 * x + A1 * y + A2 * z) * s
+                p[j] = (A1 * x + A4 * y + A5 * z) * s
+                p[l] = (A2 * x + A5 * y + A8 * z) * s
+                out.append(p)
+            return w, out
     elif k == 2 and n >= 2:
-        (a, b), (_, d) = (Js @ Js.T).tolist()
+        i, j = sel
+        a = b = d = 0.0
+        for col in cols:
+            x, y = col[i], col[j]
+            a += x * x
+            b += x * y
+            d += y * y
         det = a * d - b * b
         if det > 1e-24:
             w = math.sqrt(det)
-            adj = np.array(((d, -b), (-b, a)))
-            return w, (adj @ Js) / w
+            s = 1.0 / w
+            out = []
+            for col in cols:
+                x, y = col[i], col[j]
+                p = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+                p[i] = (d * x - b * y) * s
+                p[j] = (a * y - b * x) * s
+                out.append(p)
+            return w, out
+    Js = J6[sel]
     G = Js @ Js.T if k <= n else Js.T @ Js
     det = float(np.linalg.det(G)) if G.shape[0] > 0 else 1.0
     w = math.sqrt(det) if det > 0.0 else 0.0
     if w < 1e-12 * max(1.0, float(np.abs(G).max(initial=0.0))) ** (0.5 * G.shape[0]):
-        return w, np.asarray(w * np.linalg.pinv(Js).T, dtype=np.float64)
-    if k <= n:
-        return w, np.asarray(w * np.linalg.solve(G, Js), dtype=np.float64)
-    return w, np.asarray(w * (Js @ np.linalg.inv(G)), dtype=np.float64)
+        wP = w * np.linalg.pinv(Js).T
+    elif k <= n:
+        wP = w * np.linalg.solve(G, Js)
+    else:
+        wP = w * (Js @ np.linalg.inv(G))
+    P6 = np.zeros((6, n))
+    P6[sel] = wP
+    return w, P6.T.tolist()
 
 
-def _position_gradient(cols: list[list[float]]) -> tuple[float, list[float]] | None:
-    """``(w, grad w)`` of the 3 position rows in plain floats (the fast path).
+def _gradient(cols: list[list[float]], pcols: list[list[float]]) -> list[float]:
+    """``grad w`` from the columns of ``J6 = [V; W]`` and of ``P6 = w (J_S^+)^T`` (plain floats).
 
-    ``cols`` are the columns ``[v; w]`` of the twist Jacobian. ``P = w (J_p^+)^T`` comes from the
-    adjugate of ``G = J_p J_p^T`` (``w G^{-1} = adj(G) / w``); with no angular rows in ``P``,
-    ``c_j = v_j x p_j`` and ``d_j = p_j x w_j``. One forward pass builds ``p_j``, ``c_j`` and the
-    prefix term ``v_i . sum_{j<i} d_j``, one backward pass the suffix term
-    ``w_i . sum_{j>=i} c_j``. Returns None when ``G`` is (nearly) singular or n < 3.
+    One forward pass builds ``c_j = v_j x P_v,j + w_j x P_w,j`` and the prefix term
+    ``v_j . sum_{i<j} d_i`` (``d_i = P_v,i x w_i``), one backward pass adds the suffix term
+    ``w_j . sum_{i>=j} c_i`` (:func:`manipulability_and_gradient`).
     """
     n = len(cols)
-    if n < 3:
-        return None
-    a = b = c = d = e = f = 0.0
-    for v0, v1, v2, _, _, _ in cols:
-        a += v0 * v0
-        b += v0 * v1
-        c += v0 * v2
-        d += v1 * v1
-        e += v1 * v2
-        f += v2 * v2
-    A0, A1, A2 = d * f - e * e, c * e - b * f, b * e - c * d
-    A4, A5, A8 = a * f - c * c, b * c - a * e, a * d - b * b
-    det = a * A0 + b * A1 + c * A2
-    if det <= 1e-24:
-        return None
-    w = math.sqrt(det)
-    s = 1.0 / w
-    # per joint: c_j and the prefix term v_j . sum_{i<j} d_i
     cs: list[tuple[float, float, float]] = []
     prefix: list[float] = []
     t0 = t1 = t2 = 0.0
-    for v0, v1, v2, w0, w1, w2 in cols:
-        p0 = (A0 * v0 + A1 * v1 + A2 * v2) * s
-        p1 = (A1 * v0 + A4 * v1 + A5 * v2) * s
-        p2 = (A2 * v0 + A5 * v1 + A8 * v2) * s
-        cs.append((v1 * p2 - v2 * p1, v2 * p0 - v0 * p2, v0 * p1 - v1 * p0))
+    for (v0, v1, v2, w0, w1, w2), (p0, p1, p2, r0, r1, r2) in zip(cols, pcols, strict=True):
+        cs.append((v1 * p2 - v2 * p1 + w1 * r2 - w2 * r1,
+                   v2 * p0 - v0 * p2 + w2 * r0 - w0 * r2,
+                   v0 * p1 - v1 * p0 + w0 * r1 - w1 * r0))
         prefix.append(v0 * t0 + v1 * t1 + v2 * t2)
         t0 += p1 * w2 - p2 * w1
         t1 += p2 * w0 - p0 * w2
         t2 += p0 * w1 - p1 * w0
     grad = [0.0] * n
     s0 = s1 = s2 = 0.0
-    for i in range(n - 1, -1, -1):  # w_i . sum_{j>=i} c_j
+    for i in range(n - 1, -1, -1):
         c0, c1, c2 = cs[i]
         s0 += c0
         s1 += c1
         s2 += c2
         col = cols[i]
         grad[i] = (col[3] * s0 + col[4] * s1 + col[5] * s2) + prefix[i]
-    return w, grad
-
-
-def _general_gradient(cols: list[list[float]], pcols: list[list[float]]) -> list[float]:
-    """``grad w / w`` scaled by ``w`` from the columns of ``J6`` and of ``P6 = w (J_S^+)^T``."""
-    n = len(cols)
-    c = []
-    d = []
-    for (v0, v1, v2, w0, w1, w2), (p0, p1, p2, r0, r1, r2) in zip(cols, pcols, strict=True):
-        c.append((v1 * p2 - v2 * p1 + w1 * r2 - w2 * r1,
-                  v2 * p0 - v0 * p2 + w2 * r0 - w0 * r2,
-                  v0 * p1 - v1 * p0 + w0 * r1 - w1 * r0))
-        d.append((p1 * w2 - p2 * w1, p2 * w0 - p0 * w2, p0 * w1 - p1 * w0))
-    grad = [0.0] * n
-    s0 = s1 = s2 = 0.0
-    for i in range(n - 1, -1, -1):  # suffix sums of c
-        ci = c[i]
-        s0 += ci[0]
-        s1 += ci[1]
-        s2 += ci[2]
-        col = cols[i]
-        grad[i] = col[3] * s0 + col[4] * s1 + col[5] * s2
-    t0 = t1 = t2 = 0.0
-    for i in range(n):  # exclusive prefix sums of d
-        col = cols[i]
-        grad[i] += col[0] * t0 + col[1] * t1 + col[2] * t2
-        di = d[i]
-        t0 += di[0]
-        t1 += di[1]
-        t2 += di[2]
     return grad
 
 
@@ -167,7 +156,6 @@ def manipulability_and_gradient(J6: FloatArray, rows: Any = None) -> tuple[float
 
 def _measure(J6: FloatArray, rows: Any) -> tuple[float, list[float]]:
     """:func:`manipulability_and_gradient` with the gradient as plain floats."""
-    n = J6.shape[1]
     cols = J6.T.tolist()
     if rows is None:
         sel = [0, 1, 2]
@@ -175,14 +163,8 @@ def _measure(J6: FloatArray, rows: Any) -> tuple[float, list[float]]:
         sel = [int(r) for r in rows.reshape(-1).tolist()]
     else:  # any sequence of ints (a tuple would index J6 as (row, column))
         sel = [int(r) for r in rows]
-    if rows is None or sel == [0, 1, 2]:
-        fast = _position_gradient(cols)
-        if fast is not None:
-            return fast
-    w, wP = _scaled_pinv_t(J6[sel])
-    P6 = np.zeros((6, n))
-    P6[sel] = wP
-    return w, _general_gradient(cols, P6.T.tolist())
+    w, pcols = _scaled_pinv_columns(J6, cols, sel)
+    return w, _gradient(cols, pcols)
 
 
 def default_axes(model: Model) -> list[str]:
