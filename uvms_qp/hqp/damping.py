@@ -182,7 +182,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     shape = setup.shapes.get(key if not mh else (key, mh))
     if shape is None:
         shape = setup.shape(active, mh)
-    y_norm = math.sqrt(float(x.dot(setup.W * x)))
+    y_norm = math.sqrt(float(x.dot(x) if setup.unit_metric else x.dot(setup.W * x)))
     bounds = _screen(setup, shape, hard, y_norm)
     if bounds is not None:
         return Damping(setup.nones, (*bounds, *setup.tail))
@@ -298,7 +298,7 @@ class _Setup:
 
     __slots__ = ("A", "B", "W", "above", "active", "below", "dt", "end", "eps", "head", "last",
                  "n", "nones", "root", "scratch", "shapes", "sides", "spans", "tail",
-                 "thresholds", "undamped")
+                 "thresholds", "undamped", "unit_metric")
 
     def __init__(self, problem: Problem, thresholds: Sequence[float], dt: float) -> None:
         p = len(problem.spans)
@@ -314,6 +314,7 @@ class _Setup:
         self.A = problem.A[head:end]
         self.sides = problem.sides[:, head:end]
         self.root = np.sqrt(problem.W)
+        self.unit_metric = bool((problem.W == 1.0).all())  # y = x: nothing to scale
         self.eps = [float(e) for e in self.thresholds[:last + 1]]
         self.spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
         self.B = np.empty((2, end - head))
@@ -413,7 +414,8 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     if mh:
         rows[:mh] = hard
     setup.A.take(shape.idx, 0, out=mine)
-    _divide(mine, setup.root, out=mine)  # rows over y
+    if not setup.unit_metric:
+        _divide(mine, setup.root, out=mine)  # rows over y
     if gram.size:
         _dot(rows, rows.T, out=gram)
     squares = shape.diag.tolist()  # squared row norms
