@@ -115,7 +115,10 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
     weighted = False
     groups = levels if hard is None else [hard, *levels]
     for g, group in enumerate(groups):
-        if type(group) is not list and type(group) is not tuple:
+        if (g or hard is None) and (isinstance(group, Rows) or (
+                type(group) is tuple and group and not isinstance(group[0], Rows | tuple | list))):
+            group = (group,)  # a single Rows or a bare (A, b) tuple given as a level
+        elif type(group) is not list and type(group) is not tuple:
             return None
         m = 0
         for item in group:

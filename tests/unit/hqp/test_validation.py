@@ -22,7 +22,7 @@ from uvms_qp.errors import (
     UnknownSolverError,
     UvmsQpError,
 )
-from uvms_qp.hqp import HierarchySolver, Rows, available_solvers, solve_hierarchy
+from uvms_qp.hqp import HierarchySolver, Rows, available_solvers, normalize_problem, solve_hierarchy
 from uvms_qp.hqp.registry import SolverSpec, get_spec
 from uvms_qp.hqp.validate import MAX_MAGNITUDE
 from uvms_qp.model import load_model
@@ -79,6 +79,20 @@ def test_rows_of_lists_solve_like_arrays(solver: str) -> None:
                                            *BOX)
     assert listed.ok
     np.testing.assert_allclose(listed.x, target, atol=1e-7)
+
+
+def test_a_level_given_as_one_bare_item_is_the_level_of_that_item() -> None:
+    """``[(A, b), (A, lo, hi), Rows]`` as levels equals ``[[(A, b)], [(A, lo, hi)], [Rows]]``."""
+    rng = np.random.default_rng(4)
+    A0, A1, A2 = (rng.standard_normal((m, 3)) for m in (2, 1, 2))
+    b0, lo1, hi1 = rng.standard_normal(2), np.array([-0.1]), np.array([np.inf])
+    rows2 = Rows(A2, np.zeros(2), np.zeros(2), np.array([2.0, 3.0]))
+    bare = normalize_problem([(A0, b0), (A1, lo1, hi1), rows2], -np.ones(3), np.ones(3))
+    listed = normalize_problem([[(A0, b0)], [(A1, lo1, hi1)], [rows2]], -np.ones(3), np.ones(3))
+    assert bare.sizes == listed.sizes == (2, 1, 2)
+    np.testing.assert_array_equal(bare.A, listed.A)
+    np.testing.assert_array_equal(bare.sides, listed.sides)
+    np.testing.assert_array_equal(bare.w, listed.w)
 
 
 @pytest.mark.parametrize("solver", ["daqp", "cascade:quadprog"])
@@ -206,6 +220,12 @@ def test_unknown_name_lists_the_solvers_once():
         ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 3)), [1.0])]}, ShapeError, "hard"),
         ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, 0.0]}, InputError, "weights"),
         ([[Rows(np.eye(2), np.ones(2), np.ones(2), np.array([1.0, -1.0]), "t")]], {},
+         InputError, r"levels\[0\]\[0\] \(t\)\.weights"),
+        # a level given as one bare item, not a list of items
+        ([(np.array([[1.0, np.inf]]), [1.0])], {}, NonFiniteError, r"levels\[0\]\[0\]\.A"),
+        ([(np.eye(2), [1.0, 1e300])], {}, InputError, r"levels\[0\]\[0\]\.b"),
+        ([(np.eye(2), [0.0, 0.0], [-1.0, 1.0])], {}, BoundsError, r"levels\[0\]\[0\]"),
+        ([Rows(np.eye(2), np.ones(2), np.ones(2), np.array([1.0, -1.0]), "t")], {},
          InputError, r"levels\[0\]\[0\] \(t\)\.weights"),
     ],
 )
