@@ -196,10 +196,10 @@ def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
     """The levels examined one by one (the screen could not prove that none needs damping)."""
     p, last, eps, dt, root = len(problem.spans), setup.last, setup.eps, setup.dt, setup.root
     A, lo, hi = setup.A, setup.sides[0], setup.sides[1]
-    eq = lo == hi
-    demanding = active & (eq | (lo > 0.0) | (hi < 0.0))  # a side that excludes zero
-    y = x * root
-    scaled = A / root  # rows over y = W^(1/2) x
+    # the rows that ask for motion: active, with a side that excludes zero
+    demanding = (active & ((lo == hi) | (lo > 0.0) | (hi < 0.0))).tolist()
+    actives = active.tolist()
+    y, scaled = (x, A) if setup.unit_metric else (x * root, A / root)  # rows over y = W^(1/2) x
     norms = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
     norms[norms == 0.0] = 1.0
     unit = scaled / norms[:, None]  # unit rows: the row weights and units drop out
@@ -209,42 +209,44 @@ def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
     rows: list[FloatArray | None] = [None] * p
     sigmas = [math.nan] * p
     for k, (a, b) in enumerate(setup.spans):
-        act, dem = active[a:b], demanding[a:b]
-        if not act.any() or (Z is not None and Z.shape[1] == 0):
+        act = [i for i in range(a, b) if actives[i]]
+        if not act or (Z is not None and Z.shape[1] == 0):
             sigmas[k] = math.inf
             continue
-        M = unit[a:b][act]
+        M = unit.take(act, 0)
         if Z is not None:
             M = M @ Z
-        same = bool(np.array_equal(act, dem))
-        d = np.flatnonzero(dem) + a  # the rows that ask for motion
-        D = M if same else M[dem[act]]
-        yz = y if Z is None else Z.T @ y
+        d = [i for i in act if demanding[i]]  # the rows that ask for motion
         svd = None
-        if d.size:
+        if d:
+            same = len(d) == len(act)
+            D = M if same else M[[demanding[i] for i in act]]
+            yz = y if Z is None else Z.T @ y
             if same and k < last:  # the vectors are needed for the freedom below anyway
                 svd = _svd(M)
                 sv = svd[1]
             else:  # singular values first: the vectors only when a direction may be weak
                 sv = _GESDD(D, compute_uv=0)[1]
-            r = _rank(sv)
-            sigmas[k] = float(sv[r - 1]) if r else math.inf
-            if r and _may_be_weak(sv[:r], eps[k], dt, float(np.linalg.norm(yz)),
-                                  float(np.linalg.norm(slack[d]))):
+            values = sv.tolist()
+            r = _rank(values)
+            sigmas[k] = values[r - 1] if r else math.inf
+            slack_d = slack.take(d)
+            if r and _may_be_weak(values[:r], eps[k], dt, math.sqrt(float(yz.dot(yz))),
+                                  math.sqrt(float(slack_d.dot(slack_d)))):
                 u, sv, vt = svd if svd is not None else _svd(D)
-                rows[k] = _damping_rows(eps[k], dt, u, sv, vt, r, weighted[d], Z, root,
-                                        slack[d], yz)
+                rows[k] = _damping_rows(eps[k], dt, u, sv, vt, r, weighted.take(d), Z, root,
+                                        slack_d, yz)
         else:
             sigmas[k] = math.inf
         if k < last:
             if svd is None:
                 svd = _svd(M)
-            null = svd[2][_rank(svd[1]):].T
+            null = svd[2][_rank(svd[1].tolist()):].T
             Z = null if Z is None else Z @ null
     return Damping(tuple(rows), tuple(sigmas))
 
 
-def _may_be_weak(s: FloatArray, eps: float, dt: float, y_norm: float, slack_norm: float) -> bool:
+def _may_be_weak(s: list[float], eps: float, dt: float, y_norm: float, slack_norm: float) -> bool:
     """Whether a singular value may be below its threshold, from bounds on the demands.
 
     The demand along direction ``i`` is ``s_i v_i' Z' y - u_i' slack`` (see
@@ -253,8 +255,8 @@ def _may_be_weak(s: FloatArray, eps: float, dt: float, y_norm: float, slack_norm
     """
     if eps <= 0.0:
         return False
-    limit = np.maximum(eps * eps, dt * (s * y_norm + slack_norm))
-    return bool((s * s < limit).any())
+    floor = eps * eps
+    return any(v * v < max(floor, dt * (v * y_norm + slack_norm)) for v in s)
 
 
 def _needed(eps: float, dt: float, y_norm: float, slack_norm: float) -> float:
@@ -491,7 +493,7 @@ def _null(rows: FloatArray) -> FloatArray | None:
     if rows.shape[0] == 0:
         return None
     _, s, vt = _svd(rows)
-    return np.asarray(vt[_rank(s):].T, dtype=np.float64)
+    return np.asarray(vt[_rank(s.tolist()):].T, dtype=np.float64)
 
 
 def _damping_rows(eps: float, dt: float, u: FloatArray, s: FloatArray, vt: FloatArray, r: int,
@@ -516,9 +518,8 @@ def _damping_rows(eps: float, dt: float, u: FloatArray, s: FloatArray, vt: Float
     return np.asarray(lam[:, None] * directions * root, dtype=np.float64)
 
 
-def _rank(s: FloatArray) -> int:
-    """Number of singular values above the rank tolerance."""
-    values = s.tolist()
+def _rank(values: list[float]) -> int:
+    """Number of singular values (descending) above the rank tolerance."""
     if not values:
         return 0
     tol = max(RANK_ATOL, RANK_RTOL * values[0])
