@@ -232,7 +232,7 @@ def test_manipulability_at_a_rank_deficient_jacobian_matches_the_trace_formula(r
     ref_rows = [0, 1, 2] if rows is None else list(rows)
     for _ in range(5):
         J6 = np.array(model.state(model.random_configuration(rng)).arm_jacobian("tool"))
-        J6[list(ref_rows)[-1]] = J6[list(ref_rows)[0]]  # two selected rows equal: rank deficient
+        J6[ref_rows[-1]] = J6[ref_rows[0]]  # two selected rows equal: rank deficient
         w, g = manipulability_and_gradient(J6, rows)
         w_ref, g_ref = reference_manipulability(J6, ref_rows)
         assert np.isfinite(g).all()
