@@ -72,7 +72,7 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
             raise InputError(f"constraint {self.name!r} is not bound; call bind(model) first")
         return self.model
 
-    # ---------------------------------------------------------------------------------- fast path
+    # ------------------------------------------------------- in place (the controller, every step)
     def fill_box(  # noqa: B027 - overridden by box constraints
         self, state: State, dt: float, lower: FloatArray, upper: FloatArray
     ) -> None:
