@@ -175,7 +175,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     z = setup.A.dot(x)
     B = setup.B  # [z - lo; z - hi]
     _subtract(z, setup.sides, out=B)
-    tol = ACTIVE_RTOL * max(1.0, float(_max(_absolute(z, out=z))))
+    tol = ACTIVE_RTOL * max(1.0, float(_max(_absolute(z, out=z), initial=0.0)))
     # active: at or beyond a side (an equality row always; an infinite side never)
     active = _less_equal(setup.below, tol, out=setup.active)
     _logical_or(active, _greater_equal(setup.above, -tol, out=setup.scratch), out=active)

@@ -177,7 +177,7 @@ class HierarchySolver:
 
         Args:
             levels: Levels, highest priority first; each a list of ``Rows``, ``(A, b)`` pairs or
-                ``(A, lo, hi)`` triples over x (shape (m, n)).
+                ``(A, lo, hi)`` triples over x (shape (m, n)), or one of them alone.
             lower: Hard lower bounds on x (length n, ``-inf`` allowed), e.g. [m/s], [rad/s].
             upper: Hard upper bounds on x (length n, ``+inf`` allowed).
             hard: Hard general rows (never relaxed), same forms as a level.

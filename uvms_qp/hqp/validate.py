@@ -1,10 +1,11 @@
 """The one validator: user-facing levels into the stacked :class:`~uvms_qp.hqp.problem.Problem`.
 
 A level is a list of ``Rows`` objects, ``(A, b)`` equality pairs or ``(A, lo, hi)`` inequality
-triples over x (A of shape (m, n)); hard rows take the same forms; the box is two vectors of
-length n (``-inf`` / ``+inf`` allowed). :class:`Validator` copies every row and side into the
-buffers of a problem (reused while the structure ``(n, m_H, level sizes)`` repeats) and checks
-the whole stack with a few reductions (:func:`sides_and_rows_ok`):
+triples over x (A an array of shape (m, n)), or one such item alone; hard rows take the same
+forms; the box is two vectors of length n (``-inf`` / ``+inf`` allowed). :class:`Validator`
+copies every row and side into the buffers of a problem (reused while the structure
+``(n, m_H, level sizes)`` repeats) and checks the whole stack with a few reductions
+(:func:`sides_and_rows_ok`):
 
 * no NaN side, no lower side ``+inf`` and no upper side ``-inf`` (e.g. an infinite equality
   target), no lower side above its upper side;
@@ -33,7 +34,7 @@ that second look and the problem is solved as filled.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -97,6 +98,16 @@ def _float(value: Any) -> FloatArray:
     return as_array(value, "value")
 
 
+def _bare_item(items: Any) -> bool:
+    """True for a level (or the hard rows) given as one item instead of a list of items.
+
+    A ``Rows``, or a tuple whose first entry is not itself an item (``(A, b)``, ``(A, lo, hi)``
+    with ``A`` an array).
+    """
+    return isinstance(items, Rows) or (isinstance(items, tuple) and bool(items) and not isinstance(
+        items[0], Rows | tuple | list))
+
+
 def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None:
     """The items in the common form, their column count, hard rows and whether any is weighted.
 
@@ -115,11 +126,11 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
     weighted = False
     groups = levels if hard is None else [hard, *levels]
     for g, group in enumerate(groups):
-        if (g or hard is None) and (isinstance(group, Rows) or (
-                type(group) is tuple and group and not isinstance(group[0], Rows | tuple | list))):
-            group = (group,)  # a single Rows or a bare (A, b) tuple given as a level
+        if _bare_item(group):
+            group = (group,)
         elif type(group) is not list and type(group) is not tuple:
             return None
+        is_hard = hard is not None and g == 0
         m = 0
         for item in group:
             kind = type(item)
@@ -138,6 +149,8 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
                     lo, hi = _float(item.lower), _float(item.upper)
                     A, w = item.A, item.weights
                     if w is not None:
+                        if is_hard:  # (hard rows have no weights: checked one by one)
+                            return None
                         w = _float(w)
                         if w.shape != lo.shape:
                             return None
@@ -194,9 +207,8 @@ def _as_rows(item: Any, label: str) -> Rows:
 
 def _level_rows(items: Any, n: int | None, label: str) -> tuple[list[Rows], int | None]:
     """Validated rows of one level (or of the hard rows) and the column count."""
-    if isinstance(items, Rows) or (isinstance(items, tuple) and items and not isinstance(
-            items[0], Rows | tuple | list)):
-        items = [items]  # a single Rows or a bare (A, b) tuple given as a level
+    if _bare_item(items):
+        items = [items]
     if not isinstance(items, Sequence) or isinstance(items, str | bytes):
         raise InputError(f"{label}: expected a list of rows, got {type(items).__name__}")
     rows = [_as_rows(item, f"{label}[{i}]") for i, item in enumerate(items)]
@@ -218,7 +230,11 @@ def _one_by_one(levels: Any, lower: Any, upper: Any, hard: Any, n: int | None
     for k, level in enumerate(levels):
         rows, n = _level_rows(level, n, f"levels[{k}]")
         per_level.append(rows)
-    hard_rows, n = _level_rows(list(hard) if hard is not None else [], n, "hard")
+    if hard is None:
+        hard = []
+    elif isinstance(hard, Iterator):  # e.g. a generator of rows
+        hard = list(hard)
+    hard_rows, n = _level_rows(hard, n, "hard")
     if n == 0:
         raise ShapeError("levels: the rows have 0 columns (at least one variable is needed)")
     if n is None:
@@ -290,7 +306,7 @@ class Validator:
         fast = _fast_parse(levels, hard)
         lo_box: FloatArray | None = None
         hi_box: FloatArray | None = None
-        if fast is not None and fast[1] > 0:
+        if fast is not None and fast[1] > 0 and given in (None, fast[1]):
             parsed, cols, mh, weighted = fast
             lo_inf, hi_inf, _ = self._constants(cols)
             lo_box, hi_box = self._box(lower, cols, lo_inf), self._box(upper, cols, hi_inf)
@@ -298,7 +314,7 @@ class Validator:
         if lo_box is None or hi_box is None:
             parsed, lo_box, hi_box = _one_by_one(levels, lower, upper, hard, given)
             mh = sum(A.shape[0] for A in parsed[0][:parsed[4]])
-            weighted = any(w is not None for w in parsed[3])
+            weighted = any(w is not None for w in parsed[3][parsed[4]:])  # (level rows only)
         width = int(lo_box.shape[0])
         As, los, his, ws, n_hard, sizes = parsed
         problem = self._problem
@@ -315,7 +331,7 @@ class Validator:
         if weighted:
             w = np.concatenate([w if w is not None else np.ones(A.shape[0])
                                 for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
-            if not (_MIN(w) >= _MIN_WEIGHT and _MAX(w) <= MAX_MAGNITUDE):  # False on NaN
+            if w.size and not (_MIN(w) >= _MIN_WEIGHT and _MAX(w) <= MAX_MAGNITUDE):  # (NaN)
                 _one_by_one(levels, lower, upper, hard, width)  # names the rows at fault
             problem.set_weights(w)
             self._ones = False
@@ -367,7 +383,7 @@ def normalize_problem(levels: Any, lower: Any = None, upper: Any = None, weights
 
     Args:
         levels: Levels, highest priority first; a level is a list of ``Rows``, ``(A, b)`` pairs
-            or ``(A, lo, hi)`` triples.
+            or ``(A, lo, hi)`` triples, or one of them alone.
         lower: Hard lower bounds on x (length n, ``-inf`` allowed) or None.
         upper: Hard upper bounds on x (length n, ``+inf`` allowed) or None.
         weights: Diagonal of the metric W (length n, positive) or None for the identity.

@@ -34,6 +34,14 @@ def _orthonormal(rng, n):
     return q
 
 
+def test_levels_without_rows_need_no_damping():
+    """Empty levels (every task out of the stack, say) give no rows and no error."""
+    empty = (np.zeros((0, 3)), np.zeros(0), np.zeros(0))
+    damping = _damping([empty, empty], np.array([0.3, -0.2, 0.1]), [EPS, EPS], dt=0.05)
+    assert damping.rows == (None, None)
+    assert not damping.acted
+
+
 def test_no_rows_away_from_singularities():
     rng = np.random.default_rng(0)
     blocks = [(rng.normal(size=(3, 7)), np.zeros(3), np.zeros(3)),

@@ -24,7 +24,7 @@ from uvms_qp.errors import (
 )
 from uvms_qp.hqp import HierarchySolver, Rows, available_solvers, normalize_problem, solve_hierarchy
 from uvms_qp.hqp.registry import SolverSpec, get_spec
-from uvms_qp.hqp.validate import MAX_MAGNITUDE
+from uvms_qp.hqp.validate import MAX_MAGNITUDE, Validator, _one_by_one
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
 from uvms_qp.tasks import PostureTask
@@ -93,6 +93,9 @@ def test_a_level_given_as_one_bare_item_is_the_level_of_that_item() -> None:
     np.testing.assert_array_equal(bare.A, listed.A)
     np.testing.assert_array_equal(bare.sides, listed.sides)
     np.testing.assert_array_equal(bare.w, listed.w)
+    hard = (np.ones((1, 3)), [-1.0], [1.0])  # the hard rows take the same forms
+    np.testing.assert_array_equal(normalize_problem([(A0, b0)], hard=hard).A,
+                                  normalize_problem([(A0, b0)], hard=[hard]).A)
 
 
 @pytest.mark.parametrize("solver", ["daqp", "cascade:quadprog"])
@@ -218,6 +221,9 @@ def test_unknown_name_lists_the_solvers_once():
         ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 2)), [1.0], [0.0])]}, BoundsError,
          "hard"),
         ([[(np.eye(2), [1.0, 1.0])]], {"hard": [(np.ones((1, 3)), [1.0])]}, ShapeError, "hard"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"hard": 5}, InputError, "hard: expected a list of rows"),
+        ([[(np.eye(2), [1.0, 1.0])]], {"hard": [Rows(np.ones((1, 2)), [0.0], [1.0], [np.nan])]},
+         NonFiniteError, r"hard\[0\]\.weights"),
         ([[(np.eye(2), [1.0, 1.0])]], {"weights": [1.0, 0.0]}, InputError, "weights"),
         ([[Rows(np.eye(2), np.ones(2), np.ones(2), np.array([1.0, -1.0]), "t")]], {},
          InputError, r"levels\[0\]\[0\] \(t\)\.weights"),
@@ -382,3 +388,89 @@ def test_known_cascade_settings_reach_the_back_end():
             result = HierarchySolver(solver, options=options).solve(
                 [[(np.eye(2), [0.5, 0.5])]], -np.ones(2), np.ones(2))
             np.testing.assert_allclose(result.x, [0.5, 0.5], atol=1e-6)
+
+
+def _random_input(rng: np.random.Generator) -> tuple[Any, Any, Any, Any, Any]:
+    """Levels, lower, upper, hard and n of a random user problem, often with one fault."""
+    n = int(rng.integers(1, 4))
+
+    def item(m: int, cols: int) -> Any:
+        A = rng.standard_normal((m, cols))
+        b = rng.standard_normal(m)
+        kind = rng.integers(3)
+        if kind == 0:
+            return (A, b)
+        if kind == 1:
+            return (A, b - 1.0, b + 1.0)
+        w = rng.uniform(0.5, 2.0, m) if rng.random() < 0.5 else None
+        return Rows(A, b - 0.5, b + 0.5, w)
+
+    def group(cols: int) -> Any:
+        items = [item(int(rng.integers(0, 3)), cols) for _ in range(int(rng.integers(1, 3)))]
+        return items[0] if len(items) == 1 and rng.random() < 0.5 else items
+
+    levels = [group(n) for _ in range(int(rng.integers(0, 4)))]
+    hard = group(n) if rng.random() < 0.3 else None
+    lower = -np.ones(n) if rng.random() < 0.7 else None
+    upper = np.ones(n) if rng.random() < 0.7 else None
+    given = None if rng.random() < 0.7 else int(rng.integers(1, 4))
+    fault = rng.integers(8)
+    targets = [lv for lv in levels if isinstance(lv, list) and lv]
+    if fault == 1 and targets:  # a bad number in a listed level's first item
+        first = targets[0][0]
+        A = first[0] if isinstance(first, tuple) else first.A
+        if A.size:
+            A.flat[0] = rng.choice([np.nan, np.inf, 1e20])
+    elif fault == 2 and levels:  # a level with another column count
+        levels[-1] = (rng.standard_normal((1, n + 1)), np.zeros(1))
+    elif fault == 3 and levels:  # lower side above upper side
+        levels[0] = (rng.standard_normal((1, n)), np.ones(1), -np.ones(1))
+    elif fault == 4 and levels:  # bad weights
+        levels[0] = Rows(rng.standard_normal((2, n)), -np.ones(2), np.ones(2),
+                         np.array([1.0, rng.choice([-1.0, np.nan, 1e20])]))
+    elif fault == 5:  # weighted hard rows, with a bad weight or not
+        hard = Rows(rng.standard_normal((1, n)), -np.ones(1), np.ones(1),
+                    np.array([rng.choice([1.0, -1.0, np.nan])]))
+    elif fault == 6 and lower is not None:
+        lower[0] = rng.choice([np.nan, np.inf, 1e20])
+    return levels, lower, upper, hard, given
+
+
+def test_the_validator_agrees_with_the_item_by_item_check_on_random_input() -> None:
+    """Whatever path a problem takes, it is the one the item-by-item check describes.
+
+    The fast parse must give the same stacked rows, sides, weights and structure as
+    :func:`_one_by_one` (the slow check that names culprits), and reject what it rejects with
+    the same error.
+    """
+    rng = np.random.default_rng(11)
+    outcomes = {"solved": 0, "refused": 0}
+    for _ in range(600):
+        levels, lower, upper, hard, given = _random_input(rng)
+        try:
+            parsed, lo, hi = _one_by_one(levels, lower, upper, hard, given)
+            expected: Any = None
+        except UvmsQpError as exc:
+            expected = exc
+        try:
+            problem = Validator()(levels, lower, upper, hard, None, given)
+        except UvmsQpError as exc:
+            assert expected is not None, f"refused: {exc}"
+            assert (type(exc), str(exc)) == (type(expected), str(expected))
+            outcomes["refused"] += 1
+            continue
+        if expected is not None:  # only the stacked check sees lo > hi across the box
+            raise AssertionError(f"accepted what the item-by-item check refuses: {expected}")
+        As, los, his, ws, n_hard, sizes = parsed
+        n = lo.shape[0]
+        assert (problem.n, problem.sizes) == (n, tuple(sizes))
+        assert problem.mh == sum(A.shape[0] for A in As[:n_hard])
+        rows = np.concatenate([np.zeros((0, n)), *As])
+        np.testing.assert_array_equal(problem.A[n:], rows)
+        np.testing.assert_array_equal(problem.sides, np.vstack((
+            np.concatenate((lo, *los)), np.concatenate((hi, *his)))))
+        w = [np.ones(A.shape[0]) if v is None else v for A, v in zip(As[n_hard:], ws[n_hard:],
+                                                                       strict=True)]
+        np.testing.assert_array_equal(problem.w, np.concatenate([np.zeros(0), *w]))
+        outcomes["solved"] += 1
+    assert min(outcomes.values()) > 100, outcomes
