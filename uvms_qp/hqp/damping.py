@@ -59,8 +59,8 @@ call that the screen settles is about twenty numpy and LAPACK calls: on the demo
 33 rows, 10 variables) about 215 k instructions, a third of them deciding the active rows. A
 problem the screen cannot settle (rows that depend on the rows above, a level near its threshold)
 costs one or two SVDs per level on top, with the bookkeeping on Python lists of the few rows
-involved: about 80 us per call on the bundled demo scenario, whose stack of ten active rows in
-ten variables has one dependent row on two steps in three.
+involved (the bundled demo scenario, whose ten active rows in ten variables include one that
+depends on the others, takes that way on two steps in three; figures in ``docs/developer.md``).
 
 A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
 of the user's problem: a certificate of the user's problem does not apply to it (see
