@@ -17,6 +17,11 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 
+#: ``G = J_S J_S'`` counts as singular when ``sqrt(det G) < _SINGULAR max(1, max |G|)^(k / 2)``
+#: (k rows): the same test for the closed forms and LAPACK.
+_SINGULAR = 1e-12
+
+
 def _scaled_pinv_columns(J6: FloatArray, cols: list[list[float]], sel: list[int]
                          ) -> tuple[float, list[list[float]]]:
     """``(w, columns of P6)`` with ``P6`` the rows ``sel`` of ``w (J_S^+)^T``, zero elsewhere.
@@ -25,8 +30,8 @@ def _scaled_pinv_columns(J6: FloatArray, cols: list[list[float]], sel: list[int]
     (``cols`` are its columns as plain floats). Two or three rows of full rank (the default
     selections) take the adjugate in plain floats, ``w G^{-1} = adj(G) / w`` with
     ``G = J_S J_S^T``: LAPACK's per-call overhead exceeds the work on such tiny matrices. A
-    (nearly) singular ``G`` and any other number of rows go through LAPACK (a pseudoinverse
-    when singular).
+    (nearly) singular ``G`` (:data:`_SINGULAR`) and any other number of rows go through LAPACK
+    (a pseudoinverse when singular).
     """
     n, k = len(cols), len(sel)
     if k == 3 and n >= 3:
@@ -43,7 +48,8 @@ def _scaled_pinv_columns(J6: FloatArray, cols: list[list[float]], sel: list[int]
         A0, A1, A2 = d * f - e * e, c * e - b * f, b * e - c * d
         A4, A5, A8 = a * f - c * c, b * c - a * e, a * d - b * b
         det = a * A0 + b * A1 + c * A2
-        if det > 1e-24:
+        big = max(1.0, a, d, f)  # the largest entry of G (a Gram matrix: on its diagonal)
+        if det > _SINGULAR * _SINGULAR * big * big * big:
             w = math.sqrt(det)
             s = 1.0 / w
             out = []
@@ -64,7 +70,8 @@ def _scaled_pinv_columns(J6: FloatArray, cols: list[list[float]], sel: list[int]
             b += x * y
             d += y * y
         det = a * d - b * b
-        if det > 1e-24:
+        big = max(1.0, a, d)
+        if det > _SINGULAR * _SINGULAR * big * big:
             w = math.sqrt(det)
             s = 1.0 / w
             out = []
@@ -79,7 +86,7 @@ def _scaled_pinv_columns(J6: FloatArray, cols: list[list[float]], sel: list[int]
     G = Js @ Js.T if k <= n else Js.T @ Js
     det = float(np.linalg.det(G)) if G.shape[0] > 0 else 1.0
     w = math.sqrt(det) if det > 0.0 else 0.0
-    if w < 1e-12 * max(1.0, float(np.abs(G).max(initial=0.0))) ** (0.5 * G.shape[0]):
+    if w < _SINGULAR * max(1.0, float(np.abs(G).max(initial=0.0))) ** (0.5 * G.shape[0]):
         wP = w * np.linalg.pinv(Js).T
     elif k <= n:
         wP = w * np.linalg.solve(G, Js)
