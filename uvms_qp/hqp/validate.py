@@ -126,10 +126,11 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
     weighted = False
     groups = levels if hard is None else [hard, *levels]
     for g, group in enumerate(groups):
-        if _bare_item(group):
-            group = (group,)
-        elif type(group) is not list and type(group) is not tuple:
-            return None
+        if type(group) is not list:  # (a list of items: the common form)
+            if _bare_item(group):
+                group = (group,)
+            elif type(group) is not tuple:
+                return None
         is_hard = hard is not None and g == 0
         m = 0
         for item in group:
