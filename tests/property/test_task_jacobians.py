@@ -190,18 +190,21 @@ def test_objective_gradients_match_finite_differences(name):
     assert checked >= 9
 
 
+def _planar_2r_jacobian(q1: float, q2: float) -> np.ndarray:
+    """Twist Jacobian (6, 2) of a planar 2R arm with unit links in world axes, columns [v; w]."""
+    p1 = np.array([math.cos(q1), math.sin(q1), 0.0])
+    p = p1 + np.array([math.cos(q1 + q2), math.sin(q1 + q2), 0.0])
+    z = np.array([0.0, 0.0, 1.0])
+    J6 = np.zeros((6, 2))
+    J6[:3, 0], J6[3:, 0] = np.cross(z, p), z
+    J6[:3, 1], J6[3:, 1] = np.cross(z, p - p1), z
+    return J6
+
+
 def test_manipulability_reference_values():
     """Planar 2R arm with unit links: w = l1 l2 |sin q2| and dw/dq = [0, cos q2] (q2 in (0, pi))."""
     for q2 in (0.3, 1.0, 2.5):
-        # planar 2R arm, unit links, world axes; columns [v; w] for joints 1, 2
-        q1 = 0.4
-        p = np.array([math.cos(q1) + math.cos(q1 + q2), math.sin(q1) + math.sin(q1 + q2), 0.0])
-        p1 = np.array([math.cos(q1), math.sin(q1), 0.0])
-        z = np.array([0.0, 0.0, 1.0])
-        J6 = np.zeros((6, 2))
-        J6[:3, 0], J6[3:, 0] = np.cross(z, p), z
-        J6[:3, 1], J6[3:, 1] = np.cross(z, p - p1), z
-        w, g = manipulability_and_gradient(J6, [0, 1])
+        w, g = manipulability_and_gradient(_planar_2r_jacobian(0.4, q2), [0, 1])
         assert w == pytest.approx(abs(math.sin(q2)), rel=1e-12)
         np.testing.assert_allclose(g, [0.0, math.cos(q2)], atol=1e-12)
 
@@ -250,14 +253,7 @@ def test_manipulability_at_a_rank_deficient_jacobian_is_zero_with_a_finite_gradi
 def test_manipulability_near_a_stretched_arm_keeps_its_gradient(q2):
     """Planar 2R arm, unit links, next to the stretched (or folded) configuration: w = |sin q2|
     is small, but dw/dq = [0, cos q2] is not (it points away from the singularity)."""
-    q1 = 0.4
-    p1 = np.array([math.cos(q1), math.sin(q1), 0.0])
-    p = p1 + np.array([math.cos(q1 + q2), math.sin(q1 + q2), 0.0])
-    z = np.array([0.0, 0.0, 1.0])
-    J6 = np.zeros((6, 2))
-    J6[:3, 0], J6[3:, 0] = np.cross(z, p), z
-    J6[:3, 1], J6[3:, 1] = np.cross(z, p - p1), z
-    w, g = manipulability_and_gradient(J6, [0, 1])
+    w, g = manipulability_and_gradient(_planar_2r_jacobian(0.4, q2), [0, 1])
     assert w == pytest.approx(abs(math.sin(q2)), rel=1e-6)
     np.testing.assert_allclose(g, [0.0, math.cos(q2)], atol=1e-6)
 
