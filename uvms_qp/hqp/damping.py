@@ -281,17 +281,20 @@ def _unit(rows: FloatArray, root: FloatArray) -> FloatArray:
     return np.asarray(scaled / norms[:, None], dtype=np.float64)
 
 
-def _above(G: FloatArray, floor2: FloatArray | float) -> bool:
+def _above(G: FloatArray, floor2: FloatArray | float, diag: FloatArray | None = None) -> bool:
     """Whether ``G - diag(floor2)`` is positive definite (``G`` is overwritten).
 
     With ``G`` the Gram matrix of a block of rows ``R`` (``R R'`` for a wide block, with
     ``floor2 = floor^2 D^2``, ``D`` its row norms; ``R' D^-2 R`` for a tall one, with
     ``floor2 = floor^2``): every singular value of the unit rows ``D^-1 R`` (the ``min(m, n)``
     of them) exceeds ``floor``. A Cholesky factorisation succeeds exactly when the matrix is
-    positive definite.
+    positive definite. ``diag``: a view of ``G``'s diagonal the caller keeps (default: made
+    here, ``G`` contiguous).
     """
-    G.flat[::G.shape[0] + 1] -= floor2
-    return bool(_POTRF(G, lower=0, clean=0, overwrite_a=1)[1] == 0)
+    if diag is None:
+        diag = G.reshape(-1)[::G.shape[0] + 1]
+    _subtract(diag, floor2, out=diag)
+    return bool(_POTRF(G, 0, 0, 1)[1] == 0)
 
 
 class _Setup:
@@ -433,14 +436,12 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     missed = [v if v < 0.0 else w if w > 0.0 else 0.0 for v, w in
               zip(values[:k], values[k:], strict=True)]
     eps, dt = setup.eps, setup.dt
-    t = dt * y_norm
     floors = []  # the least value each level's directions may have (see _needed)
     for k, start, c in shape.levels:
         if eps[k] > 0.0 and c:
             own = math.sqrt(sum(v * v / q for v, q in zip(
                 missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
-            floors.append(max(SCREEN_RANK, eps[k],
-                              0.5 * (t + math.sqrt(t * t + 4.0 * dt * own))))
+            floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
         else:
             floors.append(SCREEN_RANK)
     fit, used = shape.fit, shape.used
@@ -451,8 +452,7 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     floor = max(floors[:fit], default=SCREEN_RANK)
     if used:  # the leading block minus floor^2 times its row norms squared
         lead = shape.lead_diag
-        _subtract(lead, floor * floor * lead, out=lead)
-        if _POTRF(shape.lead, 0, 0, 0)[1] != 0:
+        if not _above(shape.lead, floor * floor * lead, lead):
             return None
     bounds = [math.inf] * p
     for k in shape.floored:
@@ -461,8 +461,7 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         return bounds
     need = floors[fit]
     tall = _dot(unit.T, unit, out=shape.tall)
-    shape.tall_diag -= need * need
-    if _POTRF(tall.T, 0, 0, 1)[1] != 0:  # rank n: no freedom below
+    if not _above(tall.T, need * need, shape.tall_diag):  # rank n: no freedom below
         return None
     if eps[fit] > 0.0:
         low, high = shape.fit_sides
