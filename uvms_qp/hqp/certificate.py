@@ -645,7 +645,7 @@ def _unboxed_dual(problem: Problem, k: int, s: FloatArray, r: FloatArray, unboxe
     # equality rows, and inequality rows violated by more than round-off (a row at its side
     # to round-off keeps multiplier 0)
     rows = (problem.lo[a0:b0] == problem.hi[a0:b0]) | (
-        np.abs(sk) > 1e-12 * problem.scale(a0, b0))
+        np.abs(sk) > 1e-12 * problem.level_scale(k))
     if not rows.any():
         return None, math.inf
     root = np.sqrt(w[rows])
@@ -709,7 +709,7 @@ def certify(problem: Problem, x: FloatArray, s: FloatArray | None = None,
     levels = []
     for c in cert.levels:
         if not c.ok and c.verdict != ILL_POSED:
-            scale = problem.scale(*problem.spans[c.level])
+            scale = problem.level_scale(c.level)
             c = _settle(problem, x, c, opt_tol, scale, deadline)
         levels.append(c)
     return Certificate(tuple(levels), cert.hard_violation, cert.inside)
@@ -722,17 +722,16 @@ class _Frozen:
     def __init__(self, problem: Problem, x: FloatArray) -> None:
         self.problem, self.x = problem, x
         y = problem.A.dot(x)
-        s = y - np.minimum(np.maximum(y, problem.lo), problem.hi)
+        s = y - np.minimum(np.maximum(y, problem.lo), problem.hi)  # (slacks, keeping A x)
         a = np.abs(s)
         self.y, self.s = y, s
         self.lo_f, self.hi_f = problem.lo - a, problem.hi + a
         self.norms = np.sqrt(np.einsum("ij,ij->i", problem.A, problem.A))
+        self.residuals = _residuals(problem, s)
 
     def residual(self, k: int) -> float:
-        a, b = self.problem.spans[k]
-        h = self.problem.head
-        sk = self.s[a:b]
-        return math.sqrt(float(self.problem.w[a - h:b - h].dot(sk * sk)))
+        """Level k's residual ``rho_k`` at ``x``."""
+        return self.residuals[k]
 
     def keeps(self, other: _Frozen, k: int, tol: float = 1e-9) -> bool:
         """True when ``other.x`` lies in the frozen set of level k taken here (to ``tol``)."""
@@ -873,8 +872,7 @@ def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = No
     assert first is not None  # not ok and inside: some level failed
     z = x.copy()
     for k in range(len(problem.sizes)):
-        if k != first and _Frozen(problem, z).residual(k) <= level_tol * problem.scale(
-                *problem.spans[k]):
+        if k != first and _Frozen(problem, z).residual(k) <= level_tol * problem.level_scale(k):
             continue  # a met level keeps its point
         # every unmet level from the top: a certified level is optimal to the tolerance, not
         # exactly, and the exact solves below would otherwise trade its rows within their

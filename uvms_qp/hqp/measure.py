@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
-from .problem import Problem, scale_of
+from .problem import Problem
 from .result import OK_STATUSES, HierarchyResult, Status
 
 if TYPE_CHECKING:  # pragma: no cover - the certificate is handed in by the solver
@@ -194,7 +194,7 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
         else:
             status = _OPTIMAL
             for k, r in enumerate(residuals):
-                if r > level_tol and r > level_tol * scale_of(problem.level_sides[k]):
+                if r > level_tol and r > level_tol * problem.level_scale(k):
                     infeasible, status = k, _LEVEL_INFEASIBLE
                     break
             if infeasible is not None and certify is not None:
