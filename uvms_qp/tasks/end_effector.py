@@ -33,6 +33,8 @@ _MODE_AXES = {
 }
 _PLANAR_AXES = {"position": ["x", "y"], "orientation": ["rz"], "pose": ["x", "y", "rz"]}
 _HOLD = ("activation",)
+_POINT = (3,)  # the shape of a sampled position or (angular) velocity
+_ROTATION = (3, 3)  # the shape of a sampled rotation
 
 
 def _skew(r: FloatArray) -> FloatArray:
@@ -239,7 +241,10 @@ class EndEffectorTask(ErrorTask):
         dimension = getattr(trajectory, "dimension", None)
         if dimension is None:
             start = getattr(trajectory, "start_time", 0.0)
-            position = trajectory.sample(start if isinstance(start, int | float) else 0.0).position
+            sample = trajectory.sample(start if isinstance(start, int | float) else 0.0)
+            position = getattr(sample, "position", None)
+            if position is None:
+                raise self._not_a_sample(sample)
             dimension = int(np.size(position))
             if dimension == 2:
                 check_planar_point(label, vehicle_kind)
@@ -295,19 +300,48 @@ class EndEffectorTask(ErrorTask):
                                  "hold='activation', or call set_target()/track()")
             return
         s = traj.sample(t)
-        self._p_d = np.asarray(s.position, dtype=np.float64)
-        self._v_d = None if s.velocity is None else np.asarray(s.velocity, dtype=np.float64)
+        try:
+            p, v = s.position, s.velocity
+        except AttributeError:
+            raise self._not_a_sample(s) from None
+        p = np.asarray(p, dtype=np.float64)
+        if v is not None:
+            v = np.asarray(v, dtype=np.float64)
+        if p.shape != _POINT or (v is not None and v.shape != _POINT):  # one check per tick
+            raise self._sample_shape_error(t, position=p, velocity=v)
+        self._p_d, self._v_d = p, v
         if self._need_o:
             rot = getattr(s, "rotation", None)
             if rot is not None:
-                self._R_d = rot
+                rot = np.asarray(rot, dtype=np.float64)
                 w = getattr(s, "angular_velocity", None)
-                self._w_d = None if w is None else np.asarray(w, dtype=np.float64)
+                if w is not None:
+                    w = np.asarray(w, dtype=np.float64)
+                if rot.shape != _ROTATION or (w is not None and w.shape != _POINT):
+                    raise self._sample_shape_error(t, rotation=rot, angular_velocity=w)
+                self._R_d, self._w_d = rot, w
             elif self._R_d is None:
                 raise InputError(f"task {self.name!r}: the trajectory has no orientation and no "
                                  "fixed rotation target is set")
             else:
                 self._w_d = None
+
+    def _not_a_sample(self, sample: Any) -> InputError:
+        """The error for a trajectory whose ``sample(t)`` has no ``position``/``velocity``."""
+        return InputError(
+            f"task {self.name!r}: trajectory.sample(t) returned a {type(sample).__name__}; "
+            "expected a TrajectorySample (uvms_qp.sim.trajectories) or any object with "
+            "attributes position (3,) [m] and velocity (3,) [m/s] or None, and optionally "
+            "rotation (3, 3) and angular_velocity (3,) [rad/s]")
+
+    def _sample_shape_error(self, t: float, **values: FloatArray | None) -> ShapeError:
+        """The error naming the first of ``values`` (sampled at ``t`` [s]) of the wrong shape."""
+        for key, value in values.items():
+            expected = _ROTATION if key == "rotation" else _POINT
+            if value is not None and value.shape != expected:
+                break
+        return ShapeError(f"task {self.name!r}: trajectory.sample({t:g}).{key} has shape "
+                          f"{value.shape}; expected {expected}")  # type: ignore[union-attr]
 
     def _capture(self, state: State) -> None:
         """Hold the frame's current pose in the reference frame (``hold="activation"``)."""

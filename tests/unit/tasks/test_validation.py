@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -418,6 +419,64 @@ def test_a_duck_typed_trajectory_is_sampled_at_bind(spatial, planar):
         EndEffectorTask(trajectory=_FlatTrajectory(), name="tool").bind(spatial)
     with pytest.raises(ShapeError, match=r"sample\(t\)\.position has 2 coordinates; expected 3"):
         EndEffectorTask(trajectory=_FlatTrajectory(), name="tool").bind(planar)
+
+
+
+class _TupleTrajectory:
+    """``sample(t)`` returns a bare ``(position, velocity)`` tuple from ``start`` [s] on."""
+
+    def __init__(self, position, start):
+        self.position, self.start = np.asarray(position, dtype=float), start
+
+    def sample(self, t):
+        if t < self.start:
+            return SimpleNamespace(position=self.position, velocity=None)
+        return self.position, np.zeros(3)
+
+
+def test_a_trajectory_sampling_a_tuple_names_the_task_and_what_sample_must_return(spatial):
+    position = spatial.frame_pose(spatial.home(), "tool")[:3, 3]
+    expected = (r"task 'reach': trajectory\.sample\(t\) returned a tuple; "
+                r"expected a TrajectorySample")
+    with pytest.raises(InputError, match=expected):  # at bind
+        EndEffectorTask(trajectory=_TupleTrajectory(position, 0.0), name="reach").bind(spatial)
+    task = EndEffectorTask(trajectory=_TupleTrajectory(position, 0.05), name="reach")
+    state = spatial.state(spatial.home())
+    task.bind(spatial).rows(state, 0.0)
+    with pytest.raises(InputError, match=expected):  # at a later tick
+        task.rows(state, 0.05)
+
+
+class _ShrinkingTrajectory:
+    """Valid samples at bind time (t = 0), then ``key`` loses a coordinate (or rotation a row)."""
+
+    def __init__(self, position, key):
+        self.position, self.key = position, key
+
+    def sample(self, t):
+        values = {"position": self.position, "velocity": np.zeros(3), "rotation": np.eye(3),
+                  "angular_velocity": np.zeros(3)}
+        if t > 0.0:
+            values[self.key] = values[self.key][:2]
+        return SimpleNamespace(**values)
+
+
+@pytest.mark.parametrize(
+    ("key", "mode", "expected"),
+    [("position", "position", "(3,)"), ("velocity", "position", "(3,)"),
+     ("rotation", "pose", "(3, 3)"), ("angular_velocity", "orientation", "(3,)")],
+)
+def test_a_trajectory_sample_changing_shape_after_bind_names_the_task_and_the_shape(
+        spatial, key, mode, expected):
+    position = spatial.frame_pose(spatial.home(), "tool")[:3, 3]
+    task = EndEffectorTask(trajectory=_ShrinkingTrajectory(position, key), mode=mode,
+                           name="reach").bind(spatial)
+    state = spatial.state(spatial.home())
+    task.rows(state, 0.0)
+    with pytest.raises(ShapeError, match=re.escape(
+            f"task 'reach': trajectory.sample(0.05).{key} has shape (2") + r".*expected "
+            + re.escape(expected)):
+        task.rows(state, 0.05)
 
 
 @pytest.mark.parametrize(
