@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
 import sys
 from collections.abc import Sequence
@@ -46,7 +47,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``uvms-qp`` console script; returns the process exit code."""
+    """Entry point of the ``uvms-qp`` console script; returns the process exit code.
+
+    When the reader of stdout goes away (``uvms-qp solvers | head -1``), the command stops
+    quietly with exit status 1, as the Python documentation advises for a closed pipe: the
+    rest of stdout goes to the null device, so the interpreter's last flush does not fail.
+    """
+    try:
+        try:
+            return _main(argv)
+        finally:
+            sys.stdout.flush()
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    """Parse ``argv``, run its sub-command and return the exit code (input errors: 2)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if getattr(args, "func", None) is None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 
@@ -36,6 +37,19 @@ def test_python_dash_m_runs_the_command_line():
     assert proc.returncode == 0, proc.stderr
     assert "bluerov2_demo" in proc.stdout
 
+
+
+@pytest.mark.parametrize("argv", [["solvers"], ["models", "bluerov2_heavy_alpha5"]])
+def test_a_closed_output_pipe_ends_the_command_quietly(argv):
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader is gone before the first line (as `| head -0` would be)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "uvms_qp", *argv], stdout=write_end,
+                              stderr=subprocess.PIPE, text=True, timeout=120, check=False)
+    finally:
+        os.close(write_end)
+    assert proc.returncode == 1
+    assert proc.stderr == ""
 
 def test_scenarios_lists_each_bundled_scenario_with_its_description(capsys):
     assert main(["scenarios"]) == 0
