@@ -65,8 +65,9 @@ def _summary(metrics: dict[str, Any]) -> str:
                 text = ", ".join(f"{name} {count}" for name, count in value.items())
             else:
                 text = f"{value:.4g}" if isinstance(value, float) else str(value)
-            if key == "command_reversals_per_s_max":
-                text += f" ({metrics.get('command_reversals_worst_axis')})"
+            worst = metrics.get("command_reversals_worst_axis")
+            if key == "command_reversals_per_s_max" and worst is not None:
+                text += f" ({worst})"
             lines.append(f"  {key:<28} {text} {unit}".rstrip())
     for unit, value in (metrics.get("command_change_max") or {}).items():
         lines.append(f"  {'command_change_max':<28} {value:.4g} {unit}")

@@ -23,11 +23,12 @@ commands for ``k = 0..N-1``), independently of the controller's own diagnostics:
 - ``command_reversals_per_s`` (by entry of zeta), ``command_reversals_per_s_max`` and
   ``command_reversals_worst_axis`` [1/s]: how often each entry of the command reverses, counted
   after the start-up transient (the first :data:`TRANSIENT` seconds) and divided by the time
-  counted. A reversal (:func:`uvms_qp.controller.history.command_reversals`) is a change of sign
-  from one command to the next with both commands above ``REVERSAL_THRESHOLD`` (1 %) of the
-  entry's bound (:func:`axis_bounds`): noise around zero is not a reversal, nor is a smooth
-  change of direction (it passes through the small values), while a command that bangs between
-  its bounds reverses every step (1 / dt per second);
+  counted (the worst axis is None when no entry reverses). A reversal
+  (:func:`uvms_qp.controller.history.command_reversals`) is a change of sign from one command to
+  the next with both commands above ``REVERSAL_THRESHOLD`` (1 %) of the entry's bound
+  (:func:`axis_bounds`): noise around zero is not a reversal, nor is a smooth change of
+  direction (it passes through the small values), while a command that bangs between its bounds
+  reverses every step (1 / dt per second);
 - ``command_change_max`` [m/s^2, rad/s^2] (by unit): the largest ``|zeta_k - zeta_{k-1}| / dt``
   of the entries of each unit, from rest (``zeta_{-1} = 0``): what the vehicle's thrusters and
   the arm's actuators would have to deliver;
@@ -106,7 +107,7 @@ def reversal_metrics(result: SimulationResult, steps: NDArray[np.bool_]) -> dict
     """``command_reversals_per_s`` (by entry), its maximum and worst entry over ``steps``.
 
     The counts are divided by the time the selected steps span (``count * dt``); None when no
-    step is selected.
+    step is selected. The worst entry is None when no entry reverses (every rate 0).
     """
     selected = int(np.count_nonzero(steps))
     names = list(result.zeta_names)
@@ -120,7 +121,7 @@ def reversal_metrics(result: SimulationResult, steps: NDArray[np.bool_]) -> dict
     return {
         "command_reversals_per_s": dict(zip(names, rates.tolist(), strict=True)),
         "command_reversals_per_s_max": float(rates[worst]),
-        "command_reversals_worst_axis": names[worst],
+        "command_reversals_worst_axis": names[worst] if rates[worst] > 0.0 else None,
     }
 
 

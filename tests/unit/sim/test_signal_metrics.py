@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 from tests.support.scenario_text import bluerov_scenario
+from uvms_qp.cli.run import _summary
 from uvms_qp.controller.history import command_reversals
 from uvms_qp.sim.comparison import Comparison, SchemeRun
-from uvms_qp.sim.metrics import axis_bounds, command_change_max, settling_time
+from uvms_qp.sim.metrics import axis_bounds, command_change_max, reversal_metrics, settling_time
 from uvms_qp.sim.plots import run_figures
 from uvms_qp.sim.results import write_results
 from uvms_qp.sim.runner import simulate
@@ -53,6 +54,21 @@ def test_command_change_is_per_unit_and_from_rest():
     assert command_change_max(result) == pytest.approx({"m/s^2": 2.0, "rad/s^2": 5.0})
 
 
+def test_the_worst_axis_is_none_when_no_entry_reverses():
+    zeta = np.zeros((20, 2))
+    zeta[:, 0] = 0.2
+    result = SimpleNamespace(zeta=zeta, zeta_names=("u", "axis_e"), dt=0.1,
+                             zeta_lower=np.full((20, 2), -0.5), zeta_upper=np.full((20, 2), 0.5))
+    steps = np.ones(20, dtype=bool)
+    quiet = reversal_metrics(result, steps)
+    assert quiet["command_reversals_per_s_max"] == 0.0
+    assert quiet["command_reversals_worst_axis"] is None
+    zeta[10:, 1] = [0.3, -0.3] * 5  # the second entry bangs for 10 steps: 9 sign changes
+    loud = reversal_metrics(result, steps)
+    assert loud["command_reversals_worst_axis"] == "axis_e"
+    assert loud["command_reversals_per_s_max"] == pytest.approx(9 / 2.0)
+    assert "(" not in _summary(quiet) and "4.5 (axis_e) 1/s" in _summary(loud)
+
 def test_settling_time():
     t = np.arange(6.0)
     assert settling_time(t, np.array([1.0, 0.5, 0.1, 0.015, 0.03, 0.01])) == 5.0
@@ -88,7 +104,8 @@ def test_run_metrics_match_the_series(accel_run, tmp_path):
     rates = metrics["command_reversals_per_s"]
     assert set(rates) == set(series["zeta_names"])
     worst = metrics["command_reversals_worst_axis"]
-    assert metrics["command_reversals_per_s_max"] == rates[worst] == max(rates.values())
+    assert metrics["command_reversals_per_s_max"] == max(rates.values())
+    assert worst is None if max(rates.values()) == 0.0 else rates[worst] == max(rates.values())
     errors = series["task_errors"]["tool"]
     assert len(errors) == data["steps"] + 1 and series["task_error_units"]["tool"] == "m"
     assert errors[0] == pytest.approx(np.linalg.norm(
