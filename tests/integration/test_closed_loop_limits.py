@@ -70,3 +70,18 @@ def test_soak_ci():
     assert sum(report.faults.values()) > 50  # faults really were injected
     assert report.stages["primary"] > 9000
     assert report.memory_growth <= 1024 * 1024
+
+
+def test_a_soak_too_short_to_measure_reports_n_a_not_zero():
+    short = run_soak(150, fault_rate=0.0, warmup=100, restart=100)  # no cycle after the warm-up
+    assert short.median_first_us is None and short.drift is None
+    assert short.memory_growth is not None  # traced from step 100 on
+    text = "\n".join(short.lines())
+    assert "first/last cycle: n/a" in text and "at least 200 steps" in text
+    assert " 0.0 us" not in text
+    untraced = run_soak(50, fault_rate=0.0, warmup=100, restart=100)
+    assert untraced.memory_growth is None
+    assert "tracemalloc growth after warm-up: n/a" in "\n".join(untraced.lines())
+    measured = run_soak(200, fault_rate=0.0, warmup=100, restart=100, trace_memory=False)
+    assert measured.median_first_us > 0.0 and measured.drift is not None
+    assert "step time median first cycle" in "\n".join(measured.lines())

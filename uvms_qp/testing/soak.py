@@ -44,9 +44,11 @@ class SoakReport:
         stages: Steps per fallback stage.
         statuses: Steps per status.
         faults: Faults injected, by kind.
-        memory_growth: tracemalloc growth after the warm-up [bytes] (0 when not traced).
+        memory_growth: tracemalloc growth after the warm-up [bytes]; None when not traced
+            (tracing off, or the run ended within the warm-up).
         median_first_us: Median step time of the first cycle after the warm-up (fault-free
-            steps) [us].
+            steps) [us]; None when the run has no complete cycle after the warm-up (this and
+            the other first/last-cycle figures).
         median_last_us: Median step time of the last complete cycle (fault-free steps) [us].
         p99_us: 99th percentile of the step time (all steps) [us].
         max_us: Largest step time [us].
@@ -55,6 +57,8 @@ class SoakReport:
             load on the machine than the median) [us].
         p10_last_us: Same for the last cycle [us].
         degraded_examples: ``attempts`` of the first degraded steps (why the ladder went down).
+        cycle_window: ``(first step, steps per cycle)`` of the first cycle after the warm-up:
+            the run needs ``sum(cycle_window)`` steps for the first/last-cycle figures.
     """
 
     steps: int = 0
@@ -63,15 +67,16 @@ class SoakReport:
     stages: Counter[str] = field(default_factory=Counter)
     statuses: Counter[str] = field(default_factory=Counter)
     faults: dict[str, int] = field(default_factory=dict)
-    memory_growth: int = 0
-    median_first_us: float = 0.0
-    median_last_us: float = 0.0
+    memory_growth: int | None = None
+    median_first_us: float | None = None
+    median_last_us: float | None = None
     p99_us: float = 0.0
     max_us: float = 0.0
     wall: float = 0.0
-    p10_first_us: float = 0.0
-    p10_last_us: float = 0.0
+    p10_first_us: float | None = None
+    p10_last_us: float | None = None
     degraded_examples: list[str] = field(default_factory=list)
+    cycle_window: tuple[int, int] = (0, 0)
 
     def lines(self) -> list[str]:
         """Readable report lines."""
@@ -84,18 +89,30 @@ class SoakReport:
             "statuses: " + ", ".join(f"{k} {v}" for k, v in self.statuses.most_common()),
             "faults injected: " + (", ".join(f"{k} {v}" for k, v in self.faults.items())
                                    or "none (the primary back-end is not wrapped)"),
-            f"tracemalloc growth after warm-up: {self.memory_growth / 1024:.1f} KiB",
-            f"step time median first cycle {self.median_first_us:.1f} us, last cycle "
-            f"{self.median_last_us:.1f} us (drift {self.drift:+.1%}); p99 {self.p99_us:.1f} us, "
-            f"max {self.max_us / 1e3:.1f} ms; 10th percentile first cycle "
-            f"{self.p10_first_us:.1f} us, last cycle {self.p10_last_us:.1f} us",
+            "tracemalloc growth after warm-up: " + (
+                "n/a (not traced: tracing off, or the run ended within the warm-up)"
+                if self.memory_growth is None else f"{self.memory_growth / 1024:.1f} KiB"),
+            self._cycle_line(),
+            f"step time p99 {self.p99_us:.1f} us, max {self.max_us / 1e3:.1f} ms",
             *(f"degraded step: {e}" for e in self.degraded_examples),
         ]
 
     @property
-    def drift(self) -> float:
-        """Relative change of the median step time from the first to the last tenth."""
-        return self.median_last_us / self.median_first_us - 1.0 if self.median_first_us else 0.0
+    def drift(self) -> float | None:
+        """Relative change of the median step time, first to last cycle (None: not measured)."""
+        if self.median_first_us is None or self.median_last_us is None:
+            return None
+        return self.median_last_us / self.median_first_us - 1.0
+
+    def _cycle_line(self) -> str:
+        """The first/last-cycle step times and their drift, or why they were not measured."""
+        if self.median_first_us is None or self.drift is None:
+            start, length = self.cycle_window
+            return (f"step time first/last cycle: n/a (not measured: needs a complete cycle of "
+                    f"{length} steps after the warm-up, at least {start + length} steps)")
+        return (f"step time median first cycle {self.median_first_us:.1f} us, last cycle "
+                f"{self.median_last_us:.1f} us (drift {self.drift:+.1%}); 10th percentile first "
+                f"cycle {self.p10_first_us:.1f} us, last cycle {self.p10_last_us:.1f} us")
 
 
 def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str = "daqp",
@@ -189,10 +206,12 @@ def run_soak(steps: int, *, seed: int = 0, fault_rate: float = 0.01, solver: str
         first = times[a:b][clean[a:b]]
         a, b = start + (cycles - 1) * restart, start + cycles * restart
         last = times[a:b][clean[a:b]]
-    report.median_first_us = float(np.median(first)) * 1e6 if first.size else 0.0
-    report.median_last_us = float(np.median(last)) * 1e6 if last.size else 0.0
-    report.p10_first_us = float(np.percentile(first, 10)) * 1e6 if first.size else 0.0
-    report.p10_last_us = float(np.percentile(last, 10)) * 1e6 if last.size else 0.0
+    report.cycle_window = (start, restart)
+    if first.size and last.size:
+        report.median_first_us = float(np.median(first)) * 1e6
+        report.median_last_us = float(np.median(last)) * 1e6
+        report.p10_first_us = float(np.percentile(first, 10)) * 1e6
+        report.p10_last_us = float(np.percentile(last, 10)) * 1e6
     report.p99_us = float(np.percentile(times, 99)) * 1e6
     report.max_us = float(times.max()) * 1e6
     return report
