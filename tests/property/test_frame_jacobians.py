@@ -19,7 +19,7 @@ TOL = 1e-6
 
 def _fd_twists(model, q, zeta):
     plus = model.state(model.integrate(q, zeta, H))
-    minus = model.state(model.integrate(q, zeta, -H))
+    minus = model.state(model.integrate(q, -zeta, H))
     out = {}
     for frame in model.frames:
         v = (plus.position(frame) - minus.position(frame)) / (2 * H)
@@ -77,7 +77,7 @@ def test_arm_jacobian_matches_finite_differences_of_the_arm_alone(models, name):
     rates = rng.uniform(-1.0, 1.0, model.n_joints)
     zeta = np.concatenate((np.zeros(model.n_vehicle), rates))
     plus = model.state(model.integrate(q, zeta, H)).pose_in("tool", "arm_base")
-    minus = model.state(model.integrate(q, zeta, -H)).pose_in("tool", "arm_base")
+    minus = model.state(model.integrate(q, -zeta, H)).pose_in("tool", "arm_base")
     v = (plus[:3, 3] - minus[:3, 3]) / (2 * H)
     w = pin.log3(plus[:3, :3] @ minus[:3, :3].T) / (2 * H)
     J_arm = model.state(q).arm_jacobian("tool")

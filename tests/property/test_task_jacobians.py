@@ -36,7 +36,7 @@ H = 1e-6
 def _fd_error(task, model, q, zeta, angles=None):
     """Central difference of the task error along zeta, wrapping angle rows."""
     e_plus = task.compute_error(model.state(model.integrate(q, zeta, H)), 0.0).copy()
-    e_minus = task.compute_error(model.state(model.integrate(q, zeta, -H)), 0.0).copy()
+    e_minus = task.compute_error(model.state(model.integrate(q, -zeta, H)), 0.0).copy()
     diff = e_plus - e_minus
     if angles is not None:
         diff[angles] = wrap_angle(diff[angles])
@@ -149,7 +149,7 @@ def _fd_gradient(value, model, q):
         zeta = np.zeros(model.nv)
         zeta[model.n_vehicle + i] = 1.0
         out[i] = (value(model.state(model.integrate(q, zeta, H)))
-                  - value(model.state(model.integrate(q, zeta, -H)))) / (2 * H)
+                  - value(model.state(model.integrate(q, -zeta, H)))) / (2 * H)
     return out
 
 

@@ -513,14 +513,16 @@ class Model:
         Args:
             q: Configuration.
             zeta: Decision vector [m/s, rad/s].
-            dt: Duration [s] (may be negative).
+            dt: Duration [s], positive like the controller's period (to move backwards, negate
+                ``zeta``).
 
         Raises:
+            InputError: ``dt`` zero, negative or not a number.
             ShapeError, NonFiniteError: bad ``q``, ``zeta`` or ``dt``, or a ``zeta * dt`` that
                 overflows (finite inputs giving a non-finite configuration).
         """
         q = self.check_configuration(q)
-        step = as_scalar(dt, "dt")
+        step = as_scalar(dt, "dt", positive=True)
         z = as_vector(zeta, "zeta", self.nv)
         if self._select is None:  # every Pinocchio velocity is a rate of zeta
             v = z * step

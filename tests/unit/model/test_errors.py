@@ -78,6 +78,14 @@ def test_non_finite_zeta_and_dt(rov):
         rov.integrate(rov.home(), np.zeros(10), math.inf)
 
 
+@pytest.mark.parametrize("dt", [-0.1, 0.0])
+def test_integrate_rejects_a_duration_that_is_not_positive(rov, dt):
+    with pytest.raises(InputError, match=f"^dt: expected a positive number, got {dt}$"):
+        rov.integrate(rov.home(), np.zeros(10), dt)
+    zeta = np.linspace(-0.3, 0.3, rov.nv)  # backwards is a negated zeta
+    back = rov.integrate(rov.integrate(rov.home(), zeta, 0.1), -zeta, 0.1)
+    np.testing.assert_allclose(back, rov.home(), atol=1e-12)
+
 def test_quaternion_drift_is_normalised_and_large_errors_rejected(rov):
     q = rov.home()
     q[3:7] *= 1.0 + 1e-5
