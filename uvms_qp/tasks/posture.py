@@ -66,6 +66,8 @@ class PostureTask(ErrorTask):
         if self._posture_arg is not None and self._posture_arg.shape[0] != idx.size:
             raise InputError(f"{self.name}.posture: expected {idx.size} angles, got "
                              f"{self._posture_arg.shape[0]}")
+        if self._posture_arg is not None:
+            self._check_limits(self._posture_arg, model, idx)
         if self._posture_arg is None and self.reference == "middle":
             lo, hi = np.asarray(model.joint_lower)[idx], np.asarray(model.joint_upper)[idx]
             if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
@@ -78,6 +80,23 @@ class PostureTask(ErrorTask):
         self._A.setflags(write=False)
         self._set_reference(self._posture_arg)
         return int(idx.size)
+
+    def _check_limits(self, posture: FloatArray, model: Model, idx: Any) -> None:
+        """Reject a reference angle outside its joint's position limits (where it has any).
+
+        A posture the joint position bounds forbid can never be reached: the task would pull
+        the joint against its limit for ever.
+
+        Raises:
+            InputError: naming the first such joint, the angle and the limits [rad].
+        """
+        lo, hi = np.asarray(model.joint_lower)[idx], np.asarray(model.joint_upper)[idx]
+        outside = np.flatnonzero((posture < lo) | (posture > hi))  # never true for infinite limits
+        if outside.size:
+            k = int(outside[0])
+            raise InputError(
+                f"{self.name}.posture: joint {model.joint_names[int(idx[k])]!r} = "
+                f"{posture[k]:g} rad is outside its limits [{lo[k]:g}, {hi[k]:g}] rad")
 
     def _set_reference(self, value: FloatArray | None) -> None:
         """Set ``q_ref`` (a copy), or None."""
@@ -101,7 +120,10 @@ class PostureTask(ErrorTask):
     def _apply_update(self, key: str, value: Any) -> None:
         if key == "posture":
             n = self._idx.size or None
-            self._posture_arg = as_vector(value, f"{self.name}.posture", n)
+            posture = as_vector(value, f"{self.name}.posture", n)
+            if self.model is not None:
+                self._check_limits(posture, self.model, self._idx)
+            self._posture_arg = posture
             self._set_reference(self._posture_arg)
         else:
             super()._apply_update(key, value)

@@ -159,6 +159,13 @@ CASES = [
     ("dt = 0.1\nduration = 1.0", "dt = 1e-6\nduration = 1e6", "duration", "steps; at most"),
     ("duration = 1.0\n\n[[constraints]]", "duration = 0.0\n\n[[constraints]]",
      "trajectories.path.duration", "expected a positive number"),
+    ('heading = "current"\n', 'heading = "current"\n\n[[levels.tasks]]\ntype = "posture"\n'
+     'posture = [10.0, 1.0, 1.0, 1.0]\n', "levels[1].tasks[3].posture",
+     "joint 'axis_e' = 10 rad is outside its limits [0, 6.3] rad"),
+    ('heading = "current"\n', 'heading = "current"\n\n[[levels.tasks]]\ntype = "posture"\n'
+     'posture = [1.0, 1.0, 1.0, 1.0]\n\n[[events]]\ntime = 0.2\ntask = "posture"\n'
+     'update = { posture = [1.0, 1.0, 1.0, -2.0] }\n', "events[0].update.posture",
+     "joint 'axis_b' = -2 rad is outside its limits [0, 6.2] rad"),
     # structure
     ('name = "payload"', 'name = "tool"', "levels[1].tasks[1].name", "duplicate task name 'tool'"),
 ]

@@ -18,7 +18,7 @@ from uvms_qp.errors import (
     UnknownFrameError,
     UnknownJointError,
 )
-from uvms_qp.model import load_model
+from uvms_qp.model import DHRow, Model, load_model
 from uvms_qp.sim.trajectories import (
     CircleTrajectory,
     FixedTarget,
@@ -421,6 +421,29 @@ def test_a_duck_typed_trajectory_is_sampled_at_bind(spatial, planar):
         EndEffectorTask(trajectory=_FlatTrajectory(), name="tool").bind(planar)
 
 
+
+def test_a_posture_outside_the_joint_limits_names_the_joint_the_angle_and_the_limits(rov):
+    lower, upper = rov.joint_lower, rov.joint_upper
+    assert np.isfinite(lower).all() and np.isfinite(upper).all()
+    inside = 0.5 * (lower + upper)
+    beyond = inside.copy()
+    beyond[2] = upper[2] + 0.1
+    joint = rov.joint_names[2]
+    message = (f"reach.posture: joint {joint!r} = {beyond[2]:g} rad is outside its limits "
+               f"[{lower[2]:g}, {upper[2]:g}] rad")
+    with pytest.raises(InputError, match=re.escape(message)):
+        PostureTask(posture=beyond, name="reach").bind(rov)
+    task = PostureTask(posture=inside, name="reach").bind(rov)
+    with pytest.raises(InputError, match=re.escape(message)):  # at run time, once bound
+        task.update(posture=beyond)
+    state = rov.state(rov.home())
+    np.testing.assert_allclose(task.rows(state, 0.0).lower, inside - state.joints)  # unchanged
+    PostureTask(posture=upper, name="reach").bind(rov)  # the limits themselves are reachable
+    # a joint without limits accepts any angle
+    free = Model.from_dh([DHRow(a=0.3), DHRow(a=0.2, lower=-1.0, upper=1.0)], vehicle="planar")
+    PostureTask(posture=[10.0, 0.5]).bind(free)
+    with pytest.raises(InputError, match=r"joint '\w+' = 2 rad is outside its limits \[-1, 1\]"):
+        PostureTask(posture=[10.0, 2.0]).bind(free)
 
 class _TupleTrajectory:
     """``sample(t)`` returns a bare ``(position, velocity)`` tuple from ``start`` [s] on."""
