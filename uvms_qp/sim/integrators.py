@@ -86,6 +86,14 @@ class Integrator:
         if drift is not None and np.any(drift != 0.0) and kind != "fixed":
             self._drift = drift if kind == "spatial" else drift[:2]
 
+    @property
+    def passive_angles(self) -> tuple[str, ...]:
+        """The passive attitude angles (``"phi"``, ``"theta"``) that ``passive`` acts on.
+
+        Empty for a planar or fixed vehicle, or one that actuates roll and pitch.
+        """
+        return tuple(("phi", "theta")[i - 3] for i in self._passive_angles)
+
     def step(
         self,
         q: FloatArray,

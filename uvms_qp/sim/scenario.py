@@ -655,6 +655,12 @@ def scenario_from_dict(
         tau = float(passive_table.take_number("time_constant", 2.0, positive=True) or 2.0)
         passive_table.finish()
     integrator = Integrator(model, method, passive, tau, current)  # type: ignore[arg-type]
+    if passive_table is not None and not integrator.passive_angles:
+        why = {"planar": "a planar vehicle has no roll or pitch",
+               "fixed": "its arm is on a fixed base"}.get(
+            model.vehicle_kind, "its vehicle actuates roll and pitch, p and q")
+        raise ConfigError(f"model {model.name!r} has no passive roll or pitch ({why}), so "
+                          "[passive] would have no effect; remove it", top.at("passive"))
 
     trajectories = read_trajectories(top.take_table("trajectories"))
     resolver = TaskResolver(trajectories, current)

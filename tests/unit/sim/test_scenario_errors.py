@@ -166,6 +166,9 @@ CASES = [
      'posture = [1.0, 1.0, 1.0, 1.0]\n\n[[events]]\ntime = 0.2\ntask = "posture"\n'
      'update = { posture = [1.0, 1.0, 1.0, -2.0] }\n', "events[0].update.posture",
      "joint 'axis_b' = -2 rad is outside its limits [0, 6.2] rad"),
+    ("direction = 0.2", 'direction = 0.2\n\n[passive]\nmode = "restore"', "passive",
+     "model 'bluerov2_heavy_alpha5' has no passive roll or pitch (its vehicle actuates roll and "
+     "pitch, p and q), so [passive] would have no effect"),
     # structure
     ('name = "payload"', 'name = "tool"', "levels[1].tasks[1].name", "duplicate task name 'tool'"),
 ]
