@@ -1,8 +1,8 @@
 """Closed loops that push against every limit, and a CI-sized soak of the demo with faults.
 
-* 5x10^3 steps toward targets beyond reach and postures beyond the joint limits: after every
-  Euler step the joints are inside their limits to 1e-9 rad, and every command respects the
-  rate bounds exactly (saturation is bit-exact).
+* 5x10^3 steps toward targets beyond reach, with every joint pushed toward one of its limits at
+  5 rad/s: after every Euler step the joints are inside their limits to 1e-9 rad, and every
+  command respects the rate bounds exactly (saturation is bit-exact).
 * 10^4 steps of the bundled demo with re-drawn targets and 1 % injected back-end faults
   (``uvms_qp.testing.soak``): 0 unsafe outputs, 0 limit excursions, tracemalloc growth after the
   warm-up <= 1 MiB. The 10^6-step run is ``benchmarks/soak.py``.
@@ -13,12 +13,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.support.pushing import JointRateTask
 from tests.support.reliability_models import random_model
 from uvms_qp.constraints import JointPositionBounds, JointVelocityBounds, VehicleRateBounds
 from uvms_qp.controller import Controller
 from uvms_qp.model import load_model
 from uvms_qp.stack import Level, Stack
-from uvms_qp.tasks import EndEffectorTask, PostureTask
+from uvms_qp.tasks import EndEffectorTask
 from uvms_qp.testing.soak import run_soak
 
 STEPS = 5000
@@ -32,9 +33,9 @@ def test_closed_loop_against_the_limits(case):
     model = load_model(name) if not name.startswith("random") else random_model("planar", 5)
     rng = np.random.default_rng(7)
     lo, hi = model.joint_lower, model.joint_upper
-    beyond = np.where(rng.uniform(size=model.n_joints) < 0.5, lo - 0.5, hi + 0.5)
+    push = np.where(rng.uniform(size=model.n_joints) < 0.5, -5.0, 5.0)  # [rad/s]
     tool = EndEffectorTask(mode="position", position=[0.0, 0.0, 0.0], gain=3.0)
-    stack = Stack(levels=[Level(PostureTask(posture=list(beyond), gain=5.0)), Level(tool)],
+    stack = Stack(levels=[Level(JointRateTask(push)), Level(tool)],
                   constraints=[JointPositionBounds(gain=gain), JointVelocityBounds(),
                                VehicleRateBounds(limits=[0.2] * model.n_vehicle)])
     ctrl = Controller(model, stack, solver=solver, dt=DT)

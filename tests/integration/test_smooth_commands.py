@@ -24,6 +24,7 @@ from tests.support.closed_loop_examples import (
     readme_stack,
     run,
 )
+from tests.support.pushing import JointRateTask
 from uvms_qp import Controller, Level, Stack
 from uvms_qp.constraints import (
     CommandRateBounds,
@@ -289,8 +290,7 @@ def test_the_joint_position_limit_wins_over_the_command_rate_bound():
     start[8] = 0.5
     limit = CommandRateBounds(joint=1.0, linear=1.0, angular=1.0, initial=list(start))
     stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds(), limit],
-                  levels=[Level(PostureTask(posture=[*joints[:2], upper + 1.0, joints[3]],
-                                            gain=2.0))])
+                  levels=[Level(JointRateTask([0.0, 0.0, 2.0, 0.0]))])  # [rad/s]
     commands, results, _ = [], [], q
     controller = Controller(model, stack, dt=DT)
     for k in range(10):
