@@ -20,7 +20,6 @@ every run gets a copy).
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -126,17 +125,6 @@ def _read_only(array: Any) -> FloatArray:
     out = np.array(array, dtype=np.float64)
     out.flags.writeable = False
     return out
-
-
-class _StackCopies:
-    """Fresh copies of a stack built in code (the model is shared, everything else is copied)."""
-
-    def __init__(self, stack: Stack, model: Model) -> None:
-        self._model = model
-        self._template = copy.deepcopy(stack, {id(model): model})
-
-    def __call__(self) -> Stack:
-        return copy.deepcopy(self._template, {id(self._model): self._model})
 
 
 @dataclass(frozen=True, eq=False)
@@ -310,7 +298,8 @@ class Scenario:
         step_count(duration, dt)
         q0 = model.check_configuration(q0)
         if isinstance(stack, Stack):
-            source: Callable[[], Stack] = _StackCopies(stack, model)
+            # copies of a copy taken now: later changes to the caller's stack do not leak in
+            source: Callable[[], Stack] = stack.copy().copy
         elif callable(stack):
             source = stack
         else:

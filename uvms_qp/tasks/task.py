@@ -130,6 +130,8 @@ class Task(ABC):
             docstring); ``update(activation=...)`` ramps it.
         ramp: Duration of an activation ramp from 0 to 1 [s] (0: a step); a partial ramp takes
             the same fraction of it.
+        owner: What evaluates the task every tick (the stack assembler of the last controller
+            built on it), or None: a task serves one controller.
     """
 
     type_name: ClassVar[str] = "task"
@@ -141,6 +143,7 @@ class Task(ABC):
         self.name = check_task_name(name, self.type_name)
         self.weight = as_scalar(weight, f"{self.name}.weight", positive=True)
         self.model: Model | None = None
+        self.owner: Any = None
         self.dim = 0
         self.row_weights: FloatArray = np.zeros(0)
         self._error: Any = None  # last_error as set (a sequence becomes an array when read)
