@@ -36,6 +36,7 @@ from ..constraints import CONSTRAINT_TYPES
 from ..controller import Controller
 from ..errors import ConfigError, InputError, UnknownNameError, UvmsQpError
 from ..hqp import available_solvers
+from ..hqp.hard_set import hard_feasible
 from ..model import Model, bundled_models, load_model, model_names
 from ..schemes import SCHEME_TYPES, build_scheme
 from ..stack import Stack
@@ -348,9 +349,26 @@ class Scenario:
             source=None,
             stack_source=source,
         )
+        scenario._check_hard_set()
         scenario._check_objects(check)
         scenario.make_controller(stack=check)
         return scenario
+
+    def _check_hard_set(self) -> None:
+        """Refuse hard constraints that admit no command at ``q0`` (every step would fail).
+
+        Raises:
+            ConfigError: at ``constraints``, naming the constraints.
+        """
+        stack = self.build_stack()
+        controller = self.make_controller(stack=stack)
+        problem = controller.assembler.fill(self.model.state(self.q0), 0.0)
+        if not hard_feasible(problem):
+            names = ", ".join(c.name for c in stack.constraints)
+            raise ConfigError(
+                f"the hard constraints ({names}) admit no command at the initial configuration: "
+                "every step would end hard_infeasible; check the sides of the rows against the "
+                "bounds", "constraints")
 
     def _check_objects(self, stack: Stack) -> None:
         """Build each closed-form scheme once, then apply the events to ``stack``.
@@ -684,4 +702,5 @@ def scenario_from_dict(
         scenario.make_controller(stack=stack)
     except (UvmsQpError, ValueError) as exc:
         raise ConfigError(str(exc), "solver") from exc
+    scenario._check_hard_set()
     return scenario
