@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, final
 import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
-from ..errors import InputError
+from ..errors import InputError, ShapeError
 from ..rows import Rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -102,6 +102,19 @@ def as_gain(value: Any, name: str = "gain") -> float | FloatArray:
             raise InputError(f"{name}: expected non-negative gains, got {gains.tolist()}")
         return gains
     return as_scalar(value, name, nonnegative=True)
+
+
+def _shape_of(value: Any) -> str:
+    """``(r, c)`` of an array, ``None``, or the type of anything else (for error messages)."""
+    if value is None:
+        return "None"
+    shape = getattr(value, "shape", None)
+    if shape is None:
+        try:
+            shape = np.shape(value)
+        except (ValueError, TypeError):
+            return type(value).__name__
+    return str(tuple(shape))
 
 
 class Task(ABC):
@@ -244,18 +257,32 @@ class Task(ABC):
         ``sides`` holds the lower sides, then the upper ones. The buffers may hold stale values:
         every entry is written, except that ``A`` is not written again when it received this
         very ``J`` array (read-only) at the previous fill. Advances an activation ramp to ``t``.
+
+        Raises:
+            ShapeError: rows that do not fit ``A`` and ``sides`` (naming the task).
         """
         if self._ramping is not None:
             self.advance_activation(t)
         J, lo, hi = self.evaluate(state, t)
-        if J is not self._written[1] or A is not self._written[0]:
-            A[...] = J
-            self._written = (A, J)
-        if hi is lo:  # equality rows: one write of both sides
-            sides[...] = lo
-        else:
-            sides[0] = lo
-            sides[1] = hi
+        try:  # free on the happy path
+            if J is not self._written[1] or A is not self._written[0]:
+                A[...] = J
+                self._written = (A, J)
+            if hi is lo:  # equality rows: one write of both sides
+                sides[...] = lo
+            else:
+                sides[0] = lo
+                sides[1] = hi
+        except (ValueError, TypeError):
+            raise self._shape_error("evaluate", A, J=J, lower=lo, upper=hi) from None
+
+    def _shape_error(self, method: str, A: FloatArray, **returned: Any) -> ShapeError:
+        """The error for rows of ``method`` that do not fit the task's (dim, nv) slot."""
+        dim, nv = A.shape
+        got = ", ".join(f"{k} {_shape_of(v)}" for k, v in returned.items())
+        return ShapeError(f"{self.name}: {type(self).__name__}.{method} returned {got}; "
+                          f"expected J ({dim}, {nv}) and ({dim},) vectors (or numbers) for the "
+                          f"other parts ({dim} rows, as bind returned)")
 
     @final
     def rows(self, state: State, t: float = 0.0) -> Rows:
@@ -412,17 +439,24 @@ class ErrorTask(Task):
 
     @final  # type: ignore[misc]  # the error tasks' one fill, final below ErrorTask
     def fill(self, state: State, t: float, A: FloatArray, sides: FloatArray) -> None:
-        """Write ``J zeta = x_dot_d + K e`` (equality rows) into ``A`` and ``sides`` (2, dim)."""
+        """Write ``J zeta = x_dot_d + K e`` (equality rows) into ``A`` and ``sides`` (2, dim).
+
+        Raises:
+            ShapeError: ``J``, ``e`` or ``ff`` that do not fit the task's rows (naming it).
+        """
         if self._ramping is not None:
             self.advance_activation(t)
         J, e, ff = self.error_rows(state, t)
-        if J is not self._written[1] or A is not self._written[0]:
-            A[...] = J
-            self._written = (A, J)
-        side = e * self._gains
-        if ff is not None:
-            side += ff
-        sides[...] = side  # both sides at once
+        try:  # free on the happy path
+            if J is not self._written[1] or A is not self._written[0]:
+                A[...] = J
+                self._written = (A, J)
+            side = e * self._gains
+            if ff is not None:
+                side += ff
+            sides[...] = side  # both sides at once
+        except (ValueError, TypeError):
+            raise self._shape_error("error_rows", A, J=J, e=e, ff=ff) from None
         self._error = e
 
     @final
