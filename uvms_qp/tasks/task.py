@@ -322,7 +322,7 @@ class Task(ABC):
         """Check the task against the control period ``dt`` [s] (called by the controller).
 
         Tasks with set-based rows refuse a gain with ``gain * dt > 1``
-        (:func:`check_barrier_gain`).
+        (:func:`check_barrier_gain`), and so do error tasks (:meth:`ErrorTask.check_period`).
 
         Raises:
             InputError: the task's rows would not settle at this period.
@@ -425,6 +425,27 @@ class ErrorTask(Task):
                              f"got {self.gain.shape[0]}")
         self._gains = np.broadcast_to(self.gain, (self.dim,)).copy()
         return self
+
+    def check_period(self, dt: float) -> None:
+        """Refuse a gain with ``gain * dt >= 2`` (the largest of per-row gains).
+
+        The rows ``J zeta = x_dot_d + K e`` move the error by ``e_(k+1) = (1 - K dt) e_k`` per
+        period (feed-forward exact, no bound active): monotone for ``K dt <= 1``, overshooting
+        the target every period with a decaying alternation between 1 and 2, and never settling
+        from 2 (the command reversing every tick, growing until the box clips it). Gains above
+        ``1 / dt`` are allowed (closed-form schemes of the papers are compared there) but
+        overshoot.
+
+        Raises:
+            InputError: ``gain * dt >= 2`` (the message gives the gains for this period).
+        """
+        gain = float(np.max(self.gain))
+        if gain * dt >= 2.0 * (1.0 - 1e-12):
+            raise InputError(
+                f"{self.name}.gain: gain * dt = {gain:g} * {dt:g} = {gain * dt:.4g} >= 2: the "
+                "error would never settle (it evolves as e_(k+1) = (1 - gain dt) e_k, reversing "
+                f"every period); use gain < {2.0 / dt:.6g} [1/s] = 2 / dt, and gain <= "
+                f"{1.0 / dt:.6g} = 1 / dt to reach the target without overshoot")
 
     @abstractmethod
     def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray,
