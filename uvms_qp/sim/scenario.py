@@ -349,22 +349,22 @@ class Scenario:
             source=None,
             stack_source=source,
         )
-        scenario._check_hard_set()
         scenario._check_objects(check)
-        scenario.make_controller(stack=check)
+        scenario._check_hard_set(scenario.make_controller(stack=check))
         return scenario
 
-    def _check_hard_set(self) -> None:
+    def _check_hard_set(self, controller: Controller) -> None:
         """Refuse hard constraints that admit no command at ``q0`` (every step would fail).
+
+        ``controller`` is one built on a stack of this scenario (the events change tasks only,
+        never the constraints that make the hard set).
 
         Raises:
             ConfigError: at ``constraints``, naming the constraints.
         """
-        stack = self.build_stack()
-        controller = self.make_controller(stack=stack)
         problem = controller.assembler.fill(self.model.state(self.q0), 0.0)
         if not hard_feasible(problem):
-            names = ", ".join(c.name for c in stack.constraints)
+            names = ", ".join(c.name for c in controller.stack.constraints)
             raise ConfigError(
                 f"the hard constraints ({names}) admit no command at the initial configuration: "
                 "every step would end hard_infeasible; check the sides of the rows against the "
@@ -699,8 +699,8 @@ def scenario_from_dict(
     check_periods(tables, stack, dt)
     scenario._check_objects(stack)
     try:
-        scenario.make_controller(stack=stack)
+        controller = scenario.make_controller(stack=stack)
     except (UvmsQpError, ValueError) as exc:
         raise ConfigError(str(exc), "solver") from exc
-    scenario._check_hard_set()
+    scenario._check_hard_set(controller)
     return scenario
