@@ -15,6 +15,7 @@ Example:
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -88,6 +89,11 @@ class Stack:
     Validated at construction (non-empty levels, unique task names, types) and at
     :meth:`bind` (frames, joints, axes and dimensions against the model).
 
+    A stack drives one controller: its tasks and constraints keep run-time memory (activation
+    ramps, held targets, the previous command of a command-rate bound), so a controller built
+    on it takes them over (their ``owner``) and a controller built earlier on any of them
+    refuses to step afterwards. Give every controller its own stack (:meth:`copy`).
+
     Args:
         levels: Levels in descending priority; a plain list of tasks is accepted as a level.
         constraints: Hard constraints (bounds and inequalities) holding at every level.
@@ -135,6 +141,18 @@ class Stack:
         self.levels: tuple[Level, ...] = tuple(built)
         self.constraints: tuple[Constraint, ...] = tuple(constraints)
         self.model: Model | None = None
+
+    def copy(self) -> Stack:
+        """A copy with its own tasks and constraints (for another controller).
+
+        Everything is copied, the run-time memory of the tasks and constraints included, except
+        the model (shared); the copy's tasks and constraints have no owner.
+        """
+        parts = (*self.tasks, *self.constraints)
+        memo: dict[int, Any] = {id(m): m for m in (self.model, *(p.model for p in parts))
+                                if m is not None}
+        memo.update((id(p.owner), None) for p in parts)
+        return copy.deepcopy(self, memo)
 
     @property
     def tasks(self) -> tuple[Task, ...]:

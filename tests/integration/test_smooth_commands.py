@@ -33,7 +33,7 @@ from uvms_qp.constraints import (
     VehicleRateBounds,
 )
 from uvms_qp.controller.history import command_reversals
-from uvms_qp.errors import InputError
+from uvms_qp.errors import InputError, SolverError
 from uvms_qp.hqp import Status
 from uvms_qp.hqp.certificate import certify
 from uvms_qp.tasks import (
@@ -141,7 +141,8 @@ def test_away_from_singularities_damping_changes_nothing():
     model = readme_model()
     q = model.home()
     stack = readme_stack(readme_goal(model))
-    damped, plain = Controller(model, stack, dt=DT), Controller(model, stack, dt=DT, damping=0.0)
+    damped = Controller(model, stack, dt=DT)
+    plain = Controller(model, stack.copy(), dt=DT, damping=0.0)
     compared = proven = 0
     for k in range(200):
         state = model.state(q)
@@ -197,6 +198,57 @@ def test_a_damped_level_leaves_the_lower_levels_their_freedom():
     np.testing.assert_allclose(damped.zeta, reference.zeta, atol=1e-7)
     assert damped.task_residuals["posture"][0] == pytest.approx(
         reference.task_residuals["posture"][0], abs=1e-7)
+
+
+def _primary_fails_on_damped_problems(controller, monkeypatch):
+    """Make the primary back-end fail on every problem but the stack's own (the damped ones), as
+    a cascade past its time cap does."""
+    primary, own = controller.safe.primary, controller.assembler.problem
+    solve = primary.solve_problem
+
+    def failing(problem):
+        if problem is not own:
+            raise SolverError("time cap reached")
+        return solve(problem)
+
+    monkeypatch.setattr(primary, "solve_problem", failing)
+
+
+def test_a_damped_problem_the_primary_cannot_answer_goes_to_the_alternate(monkeypatch):
+    """The stretched DH arm with a primary that fails on every damped problem: the alternate
+    back-end answers them (stage ``alternate``, the report says why) and the command stays
+    as smooth as with a working primary."""
+    model = dh_arm()
+    goal, _ = beyond_reach(model, "link1")
+    controller = Controller(model, arm_stack(goal), solver="cascade:quadprog", dt=DT)
+    _primary_fails_on_damped_problems(controller, monkeypatch)
+    q, commands, damped = model.home(), [], 0
+    for k in range(200):
+        result = controller.step(model.state(q), k * DT)
+        if result.damped_levels:
+            damped += 1
+            assert result.stage == "alternate"
+            assert "primary: no verified answer to the damped problem" in result.attempts
+        commands.append(result.zeta)
+        q = model.integrate(q, result.zeta, DT)
+    rates = np.asarray(model.joint_rate_limit)
+    late = np.array(commands)[round(1.0 / DT):]
+    assert damped > 100
+    assert (command_reversals(late, rates) / (late.shape[0] * DT)).max() <= 0.5
+
+
+def test_a_damped_problem_no_back_end_answers_is_reported(monkeypatch):
+    model = dh_arm()
+    goal, _ = beyond_reach(model, "link1")
+    controller = Controller(model, arm_stack(goal), solver="cascade:quadprog", dt=DT)
+    _primary_fails_on_damped_problems(controller, monkeypatch)
+    monkeypatch.setattr(controller.safe, "alternate", None)
+    q = model.home()
+    for k in range(60):
+        result = controller.step(model.state(q), k * DT)
+        q = model.integrate(q, result.zeta, DT)
+    assert not result.damped_levels and result.stage == "primary"
+    assert any(a.startswith("damping: no back-end answered") for a in result.attempts)
 
 
 # ---------------------------------------------------------------------------- activation
@@ -333,6 +385,25 @@ def test_a_floor_within_the_period_condition_settles_on_its_bound(gain):
     assert command_reversals(late, np.asarray(model.joint_rate_limit)).max() == 0
 
 
+def test_a_floor_beyond_the_arms_best_settles_on_the_maximum_of_the_measure():
+    """A manipulability floor above anything the arm reaches (its best is about 0.0048 m^3):
+    the gradient vanishes at the maximum, where an uncapped floor row asks for rates the box
+    clips and the command bangs between its bounds every period. The arm climbs to the maximum
+    without ever losing measure and stops there."""
+    model = readme_model()
+    floor = ManipulabilityTask(mode="floor", minimum=0.006)
+    stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds()],
+                  levels=[Level(floor)])
+    commands, results, q = run(model, stack, model.home(), 200)
+    measures = [r.task_errors["manipulability"][0] for r in results]
+    w, grad = floor.compute_value(model.state(q))
+    assert np.diff(measures).min() >= 0.0
+    assert np.linalg.norm(grad) / w < 1e-2  # [1/rad]: on the maximum, not short of it
+    arm = commands[round(1.0 / DT):, model.n_vehicle:]
+    assert command_reversals(arm, np.asarray(model.joint_rate_limit)).max() == 0
+    assert np.abs(commands[-1]).max() < 1e-3
+
+
 def test_a_floor_that_overshoots_is_refused_with_the_largest_gain():
     model = dh_arm()
     stack = Stack(levels=[Level(ManipulabilityTask(mode="floor", minimum=0.02, gain=40.0))])
@@ -340,3 +411,36 @@ def test_a_floor_that_overshoots_is_refused_with_the_largest_gain():
                                          r"gain \* dt = 40 \* 0.05 = 2 > 1.*gain <= 20"):
         Controller(model, stack, dt=DT)
     Controller(model, stack, dt=0.025)  # the same gain at a shorter period is fine
+
+
+@pytest.mark.parametrize("task", [
+    lambda: EndEffectorTask("tool", position=[0.5, 0.0, 0.2], gain=[2.0, 2.0, 40.0]),
+    lambda: PostureTask(gain=50.0),
+])
+def test_a_tracking_gain_that_never_settles_is_refused(task):
+    """``J zeta = K e`` moves the error as ``e_(k+1) = (1 - K dt) e_k``: from ``K dt = 2`` it
+    never decays; the largest of per-row gains is the one checked."""
+    model = dh_arm()
+    stack = Stack(levels=[Level(task())])
+    with pytest.raises(InputError, match=r"\.gain: gain \* dt = \d+ \* 0.05 = [\d.]+ >= 2: the "
+                                         r"error would never settle.*gain < 40 .*gain <= 20"):
+        Controller(model, stack, dt=DT)
+    Controller(model, Stack(levels=[Level(task())]), dt=0.02)  # fine at a shorter period
+
+
+def test_a_tracking_gain_that_overshoots_reverses_the_command_every_period():
+    """Why the check: the DH arm's tool task at ``K dt = 2`` (refused) against ``K dt = 1.9``
+    (accepted: its error alternates and decays) and ``K dt = 1`` (monotone), same goal."""
+    model = dh_arm()
+    goal = model.frame_pose(model.home(), "tool")[:3, 3] + [0.002, 0.001, 0.0]  # [m]
+    rates = np.asarray(model.joint_rate_limit)
+    errors = {}
+    for gain in (20.0, 38.0):
+        stack = Stack(levels=[Level(EndEffectorTask("tool", position=goal, gain=gain))],
+                      constraints=[JointVelocityBounds()])
+        commands, results, _ = run(model, stack, model.home(), 80)
+        errors[gain] = [r.task_errors["end_effector"][0] for r in results]
+        flips = command_reversals(commands[:, model.n_vehicle:], rates).max()
+        assert (flips == 0) if gain == 20.0 else (flips >= 10)
+    assert errors[20.0][3] < 1e-9  # dead-beat: there in one period (and round-off)
+    assert errors[38.0][-1] < 1e-2 * errors[38.0][0]  # decays all the same

@@ -39,6 +39,8 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
         name: Name used in diagnostics.
         model: Bound model or None.
         rows_dim: Number of hard rows (0 for a pure box constraint).
+        owner: What fills the constraint every tick (the stack assembler of the last controller
+            built on it), or None: a constraint serves one controller.
     """
 
     type_name: ClassVar[str] = "constraint"
@@ -55,6 +57,7 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
             raise InputError(f"name: expected a non-empty string, got {name!r}")
         self.name = name or self.type_name
         self.model: Model | None = None
+        self.owner: Any = None
         self.rows_dim = 0
 
     def bind(self, model: Model) -> Constraint:

@@ -68,6 +68,8 @@ class StackAssembler:
             (0: no damping; :mod:`uvms_qp.hqp.damping`).
 
     Attributes:
+        superseded: True once a later assembler took over one of the stack's tasks or
+            constraints (:meth:`fill` then refuses).
         problem: The problem the stack is written into.
         tasks: All tasks, highest priority first.
         layout: Where each task's rows sit (for the per-task reports).
@@ -86,6 +88,12 @@ class StackAssembler:
     def __init__(self, model: Model, stack: Stack, dt: float, metric: FloatArray,
                  damping: float = DEFAULT_THRESHOLD) -> None:
         self.model = model
+        # a controller built earlier on any of these tasks or constraints no longer steps
+        self.superseded = False
+        for part in (*stack.tasks, *stack.constraints):
+            if part.owner is not None and part.owner is not self:
+                part.owner.superseded = True
+            part.owner = self
         self.stack = stack.bind(model)
         self.stack.check_period(dt)
         self.dt = dt
@@ -145,7 +153,8 @@ class StackAssembler:
         """Write the rows, weights, box and hard rows at ``(state, t)`` into :attr:`problem`.
 
         Raises:
-            InputError: ``state`` is not a State of this model (e.g. a configuration array).
+            InputError: ``state`` is not a State of this model (e.g. a configuration array), or
+                a controller built later took over this one's tasks or constraints.
             NonFiniteError: a task or constraint produced NaN/inf rows (the message names it).
         """
         try:  # a try block costs nothing on the happy path
@@ -153,6 +162,11 @@ class StackAssembler:
                 raise InputError("state: belongs to another model than the controller's")
         except AttributeError:
             raise not_a_state(state) from None
+        if self.superseded:
+            raise InputError(
+                "stack: a Controller built later took over this controller's tasks or "
+                "constraints (they keep run-time memory: ramps, held targets, the previous "
+                "command); give each controller its own stack (stack.copy())")
         for task, A, sides in self._slots:
             task.fill(state, t, A, sides)
         if not all(map(is_, map(_ROW_WEIGHTS, self.tasks), self._weight_refs)):

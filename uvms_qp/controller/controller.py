@@ -56,7 +56,9 @@ class Controller:
 
     Args:
         model: The UVMS model (the stack is bound to it here).
-        stack: Levels of tasks and hard constraints.
+        stack: Levels of tasks and hard constraints. The controller takes its tasks and
+            constraints over: a controller built earlier on any of them refuses to step
+            afterwards (each controller needs its own stack, :meth:`~uvms_qp.stack.Stack.copy`).
         solver: Back-end (``"daqp"``, ``"cascade:<qpsolvers name>"``, ``"nullspace"``).
         dt: Control period [s] (turns position limits into rate bounds).
         metric: Diagonal W (nv,) of the final regularisation ``min zeta' W zeta`` (positive), or

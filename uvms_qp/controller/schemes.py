@@ -27,6 +27,7 @@ The papers' schemes (:mod:`uvms_qp.schemes`) implement the same :class:`Scheme` 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 from collections.abc import Callable
@@ -41,7 +42,7 @@ from ..hqp.damping import Damping, level_damping
 from ..hqp.measure import clip_to_box, evaluate
 from ..hqp.registry import get_spec
 from ..safety import DEGRADED_STAGES, SafeSolve, SafeSolver, default_alternate
-from ..safety.fallback import PRIMARY
+from ..safety.fallback import ALTERNATE, PRIMARY
 from .assembler import StackAssembler
 from .result import StepResult
 
@@ -163,8 +164,16 @@ class _StackScheme:
             return out, problem, None
         damped = assembler.derived(excluded, damping.rows)
         again = self._verified(damped, out)
-        if again is None:  # the back-end failed on the damped problem: keep the undamped answer
-            return (out if ladder else None), problem, None
+        if again is None and ladder and self.safe.alternate is not None:
+            # the primary failed on the damped problem (its time cap, an error): the alternate
+            # back-end answers it, as the ladder would; the undamped answer may chatter
+            again = self._verified(damped, out, ALTERNATE)
+        if again is None:
+            if not ladder:
+                return None, problem, None
+            # no back-end answered the damped problem: the undamped answer, said so
+            note = "damping: no back-end answered the damped problem; the undamped answer is kept"
+            return dataclasses.replace(out, attempts=(*out.attempts, note)), problem, None
         return again, damped, damping
 
     def _late(self, start: float) -> bool:
@@ -172,28 +181,36 @@ class _StackScheme:
         deadline = self.safe.deadline
         return deadline is not None and self.safe.clock() - start > deadline
 
-    def _verified(self, problem: Problem, main: SafeSolve | None) -> SafeSolve | None:
+    def _verified(self, problem: Problem, main: SafeSolve | None, stage: str = PRIMARY
+                  ) -> SafeSolve | None:
         """One verified solve by the primary back-end (no ladder), clipped into the box.
 
         None when the back-end raises or does not return a verified answer (``optimal`` or
         ``level_infeasible`` within the hard tolerance); the stage and the ladder's report are
-        those of ``main`` (the primary's, without one).
+        those of ``main`` (the primary's, without one). With ``stage = ALTERNATE`` the
+        alternate back-end solves, the stage is ``alternate`` and the report says that the
+        primary failed on this problem.
         """
-        primary = self.safe.primary
+        solver = self.safe.primary if stage == PRIMARY else self.safe.alternate
+        assert solver is not None
         try:
-            result = primary.solve_problem(self._scheme_problem(problem))
+            result = solver.solve_problem(self._scheme_problem(problem))
         except Exception:  # any back-end exception, ours or foreign: the optional solve fails
             return None
-        if not result.ok or result.hard_violation > primary.hard_tol * max(
+        if not result.ok or result.hard_violation > solver.hard_tol * max(
                 1.0, problem.hard_scale):
             return None
         x, clipped = clip_to_box(result.x, problem.lower, problem.upper)
         clipped = max(clipped, float(result.info.get("clipped", 0.0)))  # type: ignore[arg-type]
         flagged = clipped > self.safe.clip_flag_tol
         if main is None:
-            return SafeSolve(x, result, PRIMARY, (), clipped, flagged)
-        return SafeSolve(x, result, main.stage, main.attempts, clipped, flagged,
-                         main.deadline_missed, main.relaxed_levels, main.elapsed)
+            return SafeSolve(x, result, stage, (), clipped, flagged)
+        attempts = main.attempts
+        if stage != PRIMARY:
+            attempts = (*attempts, f"{PRIMARY}: no verified answer to the damped problem")
+        return SafeSolve(x, result, main.stage if stage == PRIMARY else stage, attempts,
+                         clipped, flagged, main.deadline_missed, main.relaxed_levels,
+                         main.elapsed)
 
     def _blend(self, excluded: tuple[int, ...], ramping: tuple[int, ...], main: SafeSolve,
                solved: Problem, start: float) -> SafeSolve | None:

@@ -20,7 +20,6 @@ every run gets a copy).
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -37,6 +36,7 @@ from ..constraints import CONSTRAINT_TYPES
 from ..controller import Controller
 from ..errors import ConfigError, InputError, UnknownNameError, UvmsQpError
 from ..hqp import available_solvers
+from ..hqp.hard_set import hard_feasible
 from ..model import Model, bundled_models, load_model, model_names
 from ..schemes import SCHEME_TYPES, build_scheme
 from ..stack import Stack
@@ -126,17 +126,6 @@ def _read_only(array: Any) -> FloatArray:
     out = np.array(array, dtype=np.float64)
     out.flags.writeable = False
     return out
-
-
-class _StackCopies:
-    """Fresh copies of a stack built in code (the model is shared, everything else is copied)."""
-
-    def __init__(self, stack: Stack, model: Model) -> None:
-        self._model = model
-        self._template = copy.deepcopy(stack, {id(model): model})
-
-    def __call__(self) -> Stack:
-        return copy.deepcopy(self._template, {id(self._model): self._model})
 
 
 @dataclass(frozen=True, eq=False)
@@ -310,7 +299,8 @@ class Scenario:
         step_count(duration, dt)
         q0 = model.check_configuration(q0)
         if isinstance(stack, Stack):
-            source: Callable[[], Stack] = _StackCopies(stack, model)
+            # copies of a copy taken now: later changes to the caller's stack do not leak in
+            source: Callable[[], Stack] = stack.copy().copy
         elif callable(stack):
             source = stack
         else:
@@ -360,8 +350,25 @@ class Scenario:
             stack_source=source,
         )
         scenario._check_objects(check)
-        scenario.make_controller(stack=check)
+        scenario._check_hard_set(scenario.make_controller(stack=check))
         return scenario
+
+    def _check_hard_set(self, controller: Controller) -> None:
+        """Refuse hard constraints that admit no command at ``q0`` (every step would fail).
+
+        ``controller`` is one built on a stack of this scenario (the events change tasks only,
+        never the constraints that make the hard set).
+
+        Raises:
+            ConfigError: at ``constraints``, naming the constraints.
+        """
+        problem = controller.assembler.fill(self.model.state(self.q0), 0.0)
+        if not hard_feasible(problem):
+            names = ", ".join(c.name for c in controller.stack.constraints)
+            raise ConfigError(
+                f"the hard constraints ({names}) admit no command at the initial configuration: "
+                "every step would end hard_infeasible; check the sides of the rows against the "
+                "bounds", "constraints")
 
     def _check_objects(self, stack: Stack) -> None:
         """Build each closed-form scheme once, then apply the events to ``stack``.
@@ -698,7 +705,8 @@ def scenario_from_dict(
     check_periods(tables, stack, dt)
     scenario._check_objects(stack)
     try:
-        scenario.make_controller(stack=stack)
+        controller = scenario.make_controller(stack=stack)
     except (UvmsQpError, ValueError) as exc:
         raise ConfigError(str(exc), "solver") from exc
+    scenario._check_hard_set(controller)
     return scenario

@@ -203,6 +203,15 @@ class ManipulabilityTask(Task):
     * ``"floor"``: one inequality row ``grad w . qdot >= gain (minimum - w)`` ([w]/s), the
       first-order barrier that keeps ``w >= minimum``: with ``gain = 1/dt`` it is exactly
       ``w + dt grad w . qdot >= minimum``; a smaller gain approaches the floor gradually.
+      Below the floor, the demand is capped at ``gain |grad w|^2 / w``: near a maximum of
+      ``w`` (a floor the arm cannot reach) the gradient vanishes and the uncapped row would
+      ask for ``gain (minimum - w) / |grad w|`` rad/s, which the box clips and which crosses
+      the maximum in one period, so that the command would bang between its bounds. With the
+      cap the joints move at most ``gain dt |grad w| / w <= |grad w| / w`` rad per period
+      along the gradient, about the distance to the maximum (where ``w`` has a curvature of
+      about ``w`` per rad^2, exactly so for a product of sines such as a planar 2R arm's
+      ``l1 l2 |sin q2|``): ``w`` rises to its maximum without crossing it (the damping
+      criterion of :mod:`uvms_qp.hqp.damping` for a single row, in relative units of ``w``).
     * ``"shaping"``: rows ``qdot = k(w) (1 - sign(w_dot)) / 2 lambda grad w`` (Eq. (21)):
       :func:`~uvms_qp.analytic.shaping_function` ``k`` with the threshold ``rho_bar``, and the
       sign switch that only intervenes while ``w`` is not increasing (``sign(w_dot) = -1`` for
@@ -334,7 +343,14 @@ class ManipulabilityTask(Task):
         self.value = w
         self._error = (w,)
         if self.mode == "floor":
-            return np.array([self._zeros + g]), self.gain * (self.minimum - w), np.inf  # type: ignore[operator]
+            short = self.minimum - w  # type: ignore[operator]
+            if short > 0.0 and w > 0.0:
+                # near a maximum of w (an unreachable floor) the gradient vanishes: ask at most
+                # what a step of |grad w| / w [rad] along it gives (class docstring)
+                reach = math.fsum(v * v for v in g) / w
+                if reach < short:
+                    short = reach
+            return np.array([self._zeros + g]), self.gain * short, np.inf
         scale = self.gain
         if self.mode == "shaping":
             if self._prev is not None and t > self._prev[0]:

@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, final
 import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
-from ..errors import InputError
+from ..errors import InputError, ShapeError
 from ..rows import Rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -104,6 +104,19 @@ def as_gain(value: Any, name: str = "gain") -> float | FloatArray:
     return as_scalar(value, name, nonnegative=True)
 
 
+def _shape_of(value: Any) -> str:
+    """``(r, c)`` of an array, ``None``, or the type of anything else (for error messages)."""
+    if value is None:
+        return "None"
+    shape = getattr(value, "shape", None)
+    if shape is None:
+        try:
+            shape = np.shape(value)
+        except (ValueError, TypeError):
+            return type(value).__name__
+    return str(tuple(shape))
+
+
 class Task(ABC):
     """Base class of every task.
 
@@ -130,6 +143,8 @@ class Task(ABC):
             docstring); ``update(activation=...)`` ramps it.
         ramp: Duration of an activation ramp from 0 to 1 [s] (0: a step); a partial ramp takes
             the same fraction of it.
+        owner: What evaluates the task every tick (the stack assembler of the last controller
+            built on it), or None: a task serves one controller.
     """
 
     type_name: ClassVar[str] = "task"
@@ -141,6 +156,7 @@ class Task(ABC):
         self.name = check_task_name(name, self.type_name)
         self.weight = as_scalar(weight, f"{self.name}.weight", positive=True)
         self.model: Model | None = None
+        self.owner: Any = None
         self.dim = 0
         self.row_weights: FloatArray = np.zeros(0)
         self._error: Any = None  # last_error as set (a sequence becomes an array when read)
@@ -241,18 +257,32 @@ class Task(ABC):
         ``sides`` holds the lower sides, then the upper ones. The buffers may hold stale values:
         every entry is written, except that ``A`` is not written again when it received this
         very ``J`` array (read-only) at the previous fill. Advances an activation ramp to ``t``.
+
+        Raises:
+            ShapeError: rows that do not fit ``A`` and ``sides`` (naming the task).
         """
         if self._ramping is not None:
             self.advance_activation(t)
         J, lo, hi = self.evaluate(state, t)
-        if J is not self._written[1] or A is not self._written[0]:
-            A[...] = J
-            self._written = (A, J)
-        if hi is lo:  # equality rows: one write of both sides
-            sides[...] = lo
-        else:
-            sides[0] = lo
-            sides[1] = hi
+        try:  # free on the happy path
+            if J is not self._written[1] or A is not self._written[0]:
+                A[...] = J
+                self._written = (A, J)
+            if hi is lo:  # equality rows: one write of both sides
+                sides[...] = lo
+            else:
+                sides[0] = lo
+                sides[1] = hi
+        except (ValueError, TypeError):
+            raise self._shape_error("evaluate", A, J=J, lower=lo, upper=hi) from None
+
+    def _shape_error(self, method: str, A: FloatArray, **returned: Any) -> ShapeError:
+        """The error for rows of ``method`` that do not fit the task's (dim, nv) slot."""
+        dim, nv = A.shape
+        got = ", ".join(f"{k} {_shape_of(v)}" for k, v in returned.items())
+        return ShapeError(f"{self.name}: {type(self).__name__}.{method} returned {got}; "
+                          f"expected J ({dim}, {nv}) and ({dim},) vectors (or numbers) for the "
+                          f"other parts ({dim} rows, as bind returned)")
 
     @final
     def rows(self, state: State, t: float = 0.0) -> Rows:
@@ -292,7 +322,7 @@ class Task(ABC):
         """Check the task against the control period ``dt`` [s] (called by the controller).
 
         Tasks with set-based rows refuse a gain with ``gain * dt > 1``
-        (:func:`check_barrier_gain`).
+        (:func:`check_barrier_gain`), and so do error tasks (:meth:`ErrorTask.check_period`).
 
         Raises:
             InputError: the task's rows would not settle at this period.
@@ -396,6 +426,27 @@ class ErrorTask(Task):
         self._gains = np.broadcast_to(self.gain, (self.dim,)).copy()
         return self
 
+    def check_period(self, dt: float) -> None:
+        """Refuse a gain with ``gain * dt >= 2`` (the largest of per-row gains).
+
+        The rows ``J zeta = x_dot_d + K e`` move the error by ``e_(k+1) = (1 - K dt) e_k`` per
+        period (feed-forward exact, no bound active): monotone for ``K dt <= 1``, overshooting
+        the target every period with a decaying alternation between 1 and 2, and never settling
+        from 2 (the command reversing every tick, growing until the box clips it). Gains above
+        ``1 / dt`` are allowed (closed-form schemes of the papers are compared there) but
+        overshoot.
+
+        Raises:
+            InputError: ``gain * dt >= 2`` (the message gives the gains for this period).
+        """
+        gain = float(np.max(self.gain))
+        if gain * dt >= 2.0 * (1.0 - 1e-12):
+            raise InputError(
+                f"{self.name}.gain: gain * dt = {gain:g} * {dt:g} = {gain * dt:.4g} >= 2: the "
+                "error would never settle (it evolves as e_(k+1) = (1 - gain dt) e_k, reversing "
+                f"every period); use gain < {2.0 / dt:.6g} [1/s] = 2 / dt, and gain <= "
+                f"{1.0 / dt:.6g} = 1 / dt to reach the target without overshoot")
+
     @abstractmethod
     def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray,
                                                           FloatArray | None]:
@@ -409,17 +460,24 @@ class ErrorTask(Task):
 
     @final  # type: ignore[misc]  # the error tasks' one fill, final below ErrorTask
     def fill(self, state: State, t: float, A: FloatArray, sides: FloatArray) -> None:
-        """Write ``J zeta = x_dot_d + K e`` (equality rows) into ``A`` and ``sides`` (2, dim)."""
+        """Write ``J zeta = x_dot_d + K e`` (equality rows) into ``A`` and ``sides`` (2, dim).
+
+        Raises:
+            ShapeError: ``J``, ``e`` or ``ff`` that do not fit the task's rows (naming it).
+        """
         if self._ramping is not None:
             self.advance_activation(t)
         J, e, ff = self.error_rows(state, t)
-        if J is not self._written[1] or A is not self._written[0]:
-            A[...] = J
-            self._written = (A, J)
-        side = e * self._gains
-        if ff is not None:
-            side += ff
-        sides[...] = side  # both sides at once
+        try:  # free on the happy path
+            if J is not self._written[1] or A is not self._written[0]:
+                A[...] = J
+                self._written = (A, J)
+            side = e * self._gains
+            if ff is not None:
+                side += ff
+            sides[...] = side  # both sides at once
+        except (ValueError, TypeError):
+            raise self._shape_error("error_rows", A, J=J, e=e, ff=ff) from None
         self._error = e
 
     @final

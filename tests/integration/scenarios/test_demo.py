@@ -1,7 +1,8 @@
 """The bundled demo, end to end through ``uvms-qp run``: its promises as numbers in results.json.
 
 BlueROV2 Heavy + Reach Alpha 5, a tool path first inside the arm's workspace, then far beyond it,
-a 20 N payload picked up at t = 15 s, a current at 0.2 rad, six mission tasks and all hard bounds.
+a 20 N payload picked up at t = 15 s, a current at 0.2 rad, six mission tasks and all hard bounds
+(the change of the command per period included).
 """
 
 from __future__ import annotations
@@ -94,10 +95,23 @@ def test_tool_tracks_the_path(demo):
 def test_vehicle_moves_only_when_the_arm_needs_it(demo):
     _, results = demo
     reach, beyond = results["phases"]["within_reach"], results["phases"]["beyond_reach"]
-    assert reach["vehicle_displacement_max"] < 1e-4  # [m]: the arm alone follows the path
-    assert reach["vehicle_speed_max"] < 1e-4  # [m/s]
+    # [m, m/s]: the arm follows the path; the vehicle only helps at the path's corners, where
+    # the joints' acceleration bound binds
+    assert reach["vehicle_displacement_max"] < 1e-3
+    assert reach["vehicle_speed_max"] < 1e-2
     assert beyond["vehicle_displacement_max"] > 0.4  # [m]
     assert beyond["vehicle_speed_max"] == pytest.approx(0.3, abs=0.02)  # at its rate bound
+
+
+def test_the_command_changes_no_faster_than_the_actuators_follow(demo):
+    """The demo's command-rate bound: per period, each joint rate changes by at most
+    1 rad/s^2 * dt, each vehicle rate by at most 0.6 (m/s^2 or rad/s^2) * dt, from rest, the
+    payload pick-up at 15 s included."""
+    _, results = demo
+    zeta = np.asarray(results["series"]["zeta"])
+    change = np.abs(np.diff(np.vstack([np.zeros(zeta.shape[1]), zeta]), axis=0)) / results["dt"]
+    assert change[:, :6].max() <= 0.6 + 1e-9
+    assert change[:, 6:].max() <= 1.0 + 1e-9
 
 
 def test_beyond_reach_part_is_really_out_of_the_arms_reach():

@@ -1,6 +1,8 @@
 """Fault injection through the controller: every step safe, the stage named, no after-effects.
 
-The demo stack (bluerov2_demo: five levels, all hard bounds) is stepped along the states of a
+The demo stack (bluerov2_demo: all hard bounds but the command-rate bound, which remembers the
+previous command by design, so that a faulted step would rightly leave a trace) is stepped along
+the states of a
 clean reference run; the primary back-end of a second controller fails at step K (or for N steps
 from K). Every command is finite and inside the box, the stage that produced it is in the result
 and its summary, and once the back-end solves again the commands equal the reference ones: a
@@ -26,11 +28,20 @@ K = 12
 STEPS = 30
 
 
+def demo():
+    """The demo scenario and a new stack of it without its command-rate bound."""
+    sc = load_scenario("bluerov2_demo")
+    stack = sc.build_stack()
+    kept = [c for c in stack.constraints if c.type_name != "command_rate_bounds"]
+    assert len(kept) == len(stack.constraints) - 1
+    return sc, Stack(levels=stack.levels, constraints=kept)
+
+
 @pytest.fixture(scope="module")
 def reference():
     """States and commands of a clean closed-loop run of the demo (daqp)."""
-    sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric)
+    sc, stack = demo()
+    ctrl = Controller(sc.model, stack, dt=sc.dt, metric=sc.metric)
     q = np.array(sc.q0)
     qs, zetas = [], []
     for k in range(STEPS):
@@ -48,8 +59,8 @@ def replay(qs, fault, *, start=K, count=1, armed=False, everything=False, strict
     calls fail (or, with ``armed``, every call during steps start..start+count-1 fails).
     ``everything`` faults the alternate back-end as well; ``at="binding"`` faults DAQP's C
     binding below the back-end instead of the back-end object."""
-    sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric, strict=strict,
+    sc, stack = demo()
+    ctrl = Controller(sc.model, stack, dt=sc.dt, metric=sc.metric, strict=strict,
                       deadline=deadline)
     wrappers = [inject(ctrl, fault, sleep=sleep, at=at)]
     if everything:
@@ -164,8 +175,8 @@ def test_weighted_scheme_falls_back_to_a_weight_honouring_cascade(reference):
     """DAQP's hierarchical mode would normalise the weighted rows: the weighted scheme's
     alternate is a cascade on another library, and it gives the primary's answer."""
     qs, _ = reference
-    sc = load_scenario("bluerov2_demo")
-    ctrl = Controller(sc.model, sc.build_stack(), dt=sc.dt, metric=sc.metric, scheme="weighted",
+    sc, stack = demo()
+    ctrl = Controller(sc.model, stack, dt=sc.dt, metric=sc.metric, scheme="weighted",
                       priority_ratio=100.0)
     assert ctrl.solver_name == "cascade:daqp"
     assert ctrl.safe.alternate.name.startswith("cascade:")

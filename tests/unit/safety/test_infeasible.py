@@ -86,11 +86,13 @@ def test_bounds_that_become_mutually_infeasible_at_run_time(rov, solver):
                   constraints=[VehicleRateBounds(linear=0.3, angular=0.3), JointVelocityBounds(),
                                row])
     ctrl = Controller(rov, stack, solver=solver, dt=DT)
-    strict = Controller(rov, stack, solver=solver, dt=DT, strict=True)
+    twin = stack.copy()
+    strict = Controller(rov, twin, solver=solver, dt=DT, strict=True)
     state = rov.state(q)
     ok = ctrl.step(state, 0.0)
     assert ok.stage == "primary" and ok.zeta[0] >= 0.2 - 1e-9
     row.lower[:] = 0.5
+    twin.constraints[-1].lower[:] = 0.5
     bad = ctrl.step(state, 0.05)
     assert bad.status == Status.HARD_INFEASIBLE and bad.stage in ("zero", "decayed_previous")
     assert np.all(bad.zeta >= bad.lower) and np.all(bad.zeta <= bad.upper)

@@ -213,6 +213,30 @@ def test_task_that_cannot_be_evaluated_is_caught_at_load_time():
         load_text(text)
 
 
+CONTRADICTION = """
+[[constraints]]
+type = "linear_inequality"
+A = [[1, 0, 0, 0, 0, 0, 0, 0, 0, 0]]
+lower = [LOWER]
+upper = [6.0]
+
+[[constraints]]
+type = "vehicle_rate_bounds"
+linear = 0.3
+angular = 0.3
+"""
+
+
+def test_hard_constraints_that_admit_no_command_are_refused_at_load_time():
+    """A hard row ``u >= 5`` m/s against a surge bound of 0.3 m/s: every step would end
+    ``hard_infeasible``; the loader says so, naming the constraints. ``u >= 0.2`` loads."""
+    with pytest.raises(ConfigError, match=r"^constraints: the hard constraints "
+                                          r"\(joint_velocity_bounds, linear_inequality, "
+                                          r"vehicle_rate_bounds\) admit no command"):
+        load_text(BASE + CONTRADICTION.replace("LOWER", "5.0"))
+    load_text(BASE + CONTRADICTION.replace("LOWER", "0.2"))
+
+
 def test_heading_from_current_needs_a_current():
     text = BASE.replace("[current]\ndirection = 0.2\n", "")
     with pytest.raises(ConfigError, match=r"^levels\[1\]\.tasks\[2\]\.heading: 'current' needs"):

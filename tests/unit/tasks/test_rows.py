@@ -186,7 +186,10 @@ def ref_manipulability(task, ref, t, memory):
     if task.mode == "floor":
         A = np.zeros((1, m.nv))
         A[0, m.n_vehicle:] = g
-        return A, np.array([task.gain * (task.minimum - w)]), np.array([np.inf])
+        short = task.minimum - w
+        if short > 0 and w > 0:
+            short = min(short, float(g @ g) / w)  # the cap near a maximum of w
+        return A, np.array([task.gain * short]), np.array([np.inf])
     scale = task.gain
     if task.mode == "shaping":
         prev = memory.get("prev")
