@@ -208,7 +208,7 @@ class Stack:
         for k, level in enumerate(self.levels):
             for i, task in enumerate(level.tasks):
                 try:
-                    task.check_period(dt)
+                    task.set_period(dt)
                 except InputError as exc:
                     exc.args = (f"levels[{k}].tasks[{i}] ({task.name}): {exc}", *exc.args[1:])
                     raise

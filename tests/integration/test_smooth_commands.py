@@ -237,6 +237,38 @@ def test_a_damped_problem_the_primary_cannot_answer_goes_to_the_alternate(monkey
     assert (command_reversals(late, rates) / (late.shape[0] * DT)).max() <= 0.5
 
 
+def test_a_damped_problem_past_the_deadline_goes_to_no_other_back_end(monkeypatch):
+    """Past the step's deadline the optional solves stop: no alternate solve of the damped
+    problem, the undamped answer kept and the step reported late."""
+    model = dh_arm()
+    goal, _ = beyond_reach(model, "link1")
+    controller = Controller(model, arm_stack(goal), solver="cascade:quadprog", dt=DT,
+                            deadline=0.01)
+    now = [0.0]
+    controller.safe.clock = lambda: now[0]
+    primary, own = controller.safe.primary, controller.assembler.problem
+    solve = primary.solve_problem
+
+    def slow(problem):  # a primary that runs past the deadline on the damped problems
+        if problem is not own:
+            now[0] += 1.0
+            raise SolverError("time cap reached")
+        return solve(problem)
+
+    monkeypatch.setattr(primary, "solve_problem", slow)
+    alternate_solve = controller.safe.alternate.solve_problem
+    monkeypatch.setattr(controller.safe.alternate, "solve_problem",
+                        lambda problem: pytest.fail("the alternate ran past the deadline")
+                        if problem is not own else alternate_solve(problem))
+    q, late = model.home(), 0
+    for k in range(100):
+        result = controller.step(model.state(q), k * DT)
+        assert not result.damped_levels
+        late += result.deadline_missed
+        q = model.integrate(q, result.zeta, DT)
+    assert late > 50  # every step whose damped problem the primary tried
+
+
 def test_a_damped_problem_no_back_end_answers_is_reported(monkeypatch):
     model = dh_arm()
     goal, _ = beyond_reach(model, "link1")
@@ -426,6 +458,22 @@ def test_a_tracking_gain_that_never_settles_is_refused(task):
                                          r"error would never settle.*gain < 40 .*gain <= 20"):
         Controller(model, stack, dt=DT)
     Controller(model, Stack(levels=[Level(task())]), dt=0.02)  # fine at a shorter period
+
+
+def test_a_gain_updated_at_run_time_is_checked_against_the_period():
+    """``update(gain=...)`` once the controller is built: refused like the constructor's gain,
+    and the task left as it was (all or nothing)."""
+    model = dh_arm()
+    tool = EndEffectorTask("tool", position=[0.5, 0.0, 0.2], gain=2.0)
+    floor = ManipulabilityTask(mode="floor", minimum=0.001, gain=1.0)
+    Controller(model, Stack(levels=[Level(floor), Level(tool)]), dt=DT)
+    with pytest.raises(InputError, match=r"end_effector\.gain: gain \* dt = 40 \* 0.05 = 2 >= 2"):
+        tool.update(gain=40.0, weight=3.0)
+    assert tool.gain == 2.0 and tool.weight == 1.0
+    with pytest.raises(InputError, match=r"manipulability\.gain: gain \* dt = 30 \* 0.05"):
+        floor.update(gain=30.0)
+    assert floor.gain == 1.0
+    tool.update(gain=30.0)  # overshoots, but settles: accepted
 
 
 def test_a_tracking_gain_that_overshoots_reverses_the_command_every_period():

@@ -88,14 +88,16 @@ class StackAssembler:
     def __init__(self, model: Model, stack: Stack, dt: float, metric: FloatArray,
                  damping: float = DEFAULT_THRESHOLD) -> None:
         self.model = model
-        # a controller built earlier on any of these tasks or constraints no longer steps
         self.superseded = False
-        for part in (*stack.tasks, *stack.constraints):
-            if part.owner is not None and part.owner is not self:
-                part.owner.superseded = True
-            part.owner = self
-        self.stack = stack.bind(model)
-        self.stack.check_period(dt)
+        bound_to = stack.model
+        try:
+            self.stack = stack.bind(model)
+            self.stack.check_period(dt)
+        except Exception:
+            if bound_to is not None and bound_to is not model:
+                self._take_over(stack)  # partly bound to this model: no longer the other's
+            raise
+        self._take_over(stack)
         self.dt = dt
         nv = int(model.nv)
         self.nv = nv
@@ -163,10 +165,7 @@ class StackAssembler:
         except AttributeError:
             raise not_a_state(state) from None
         if self.superseded:
-            raise InputError(
-                "stack: a Controller built later took over this controller's tasks or "
-                "constraints (they keep run-time memory: ramps, held targets, the previous "
-                "command); give each controller its own stack (stack.copy())")
+            self._refuse()
         for task, A, sides in self._slots:
             task.fill(state, t, A, sides)
         if not all(map(is_, map(_ROW_WEIGHTS, self.tasks), self._weight_refs)):
@@ -195,9 +194,33 @@ class StackAssembler:
                 tuple(i for i, a in enumerate(values) if 0.0 < a < 1.0))
 
     def reset(self) -> None:
-        """Forget the run-time memory of every task and constraint, and the command history."""
+        """Forget the run-time memory of every task and constraint, and the command history.
+
+        Raises:
+            InputError: a controller built later took over this one's tasks or constraints.
+        """
+        if self.superseded:
+            self._refuse()
         self.stack.reset()
         self.history.reset()
+
+    def _take_over(self, stack: Stack) -> None:
+        """Make this assembler the owner of the stack's tasks and constraints.
+
+        The assembler that owned any of them before refuses to fill, reset or bound from now
+        on (:meth:`_refuse`).
+        """
+        for part in (*stack.tasks, *stack.constraints):
+            if part.owner is not None and part.owner is not self:
+                part.owner.superseded = True
+            part.owner = self
+
+    @staticmethod
+    def _refuse() -> None:
+        raise InputError(
+            "stack: a Controller built later took over this controller's tasks or "
+            "constraints (they keep run-time memory: ramps, held targets, the previous "
+            "command); give each controller its own stack (stack.copy())")
 
     def derived(self, excluded: tuple[int, ...], extra: tuple[FloatArray | None, ...]
                 ) -> Problem:
@@ -316,6 +339,8 @@ class StackAssembler:
 
     def bounds(self, state: State) -> tuple[FloatArray, FloatArray]:
         """Merged hard box ``(lower, upper)`` on zeta at ``state`` (copies)."""
+        if self.superseded:
+            self._refuse()
         self._box[...] = self._static_box
         lower, upper = self._box
         for c in self._dynamic_box:

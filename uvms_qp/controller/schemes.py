@@ -134,7 +134,11 @@ class _StackScheme:
                 out, status = blend, (Status.BLENDED if out.result.ok else Status.UNPROVEN)
         self.safe.previous = out.x
         self.status_counts[status.value] += 1
-        return assembler.step_result(out, t, clock() - start, self.name, self.solver_name,
+        step_time = clock() - start
+        deadline = self.safe.deadline
+        if deadline is not None and step_time > deadline and not out.deadline_missed:
+            out = dataclasses.replace(out, deadline_missed=True)  # late in an optional solve
+        return assembler.step_result(out, t, step_time, self.name, self.solver_name,
                                      status, solved, damping, excluded, ramping)
 
     def _solve(self, excluded: tuple[int, ...], start: float, ladder: bool = True
@@ -164,7 +168,8 @@ class _StackScheme:
             return out, problem, None
         damped = assembler.derived(excluded, damping.rows)
         again = self._verified(damped, out)
-        if again is None and ladder and self.safe.alternate is not None:
+        if (again is None and ladder and self.safe.alternate is not None
+                and not self._late(start)):
             # the primary failed on the damped problem (its time cap, an error): the alternate
             # back-end answers it, as the ladder would; the undamped answer may chatter
             again = self._verified(damped, out, ALTERNATE)

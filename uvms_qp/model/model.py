@@ -377,6 +377,28 @@ class Model:
 
     # --- configurations --------------------------------------------------------------------
 
+    def joint_outside_limits(self, angles: Any, joints: Any = None) -> tuple[int, str] | None:
+        """The first angle outside its joint's position limits, or None when all are inside.
+
+        Args:
+            angles: Joint angles [rad] (or positions [m] of prismatic joints), one per entry of
+                ``joints``.
+            joints: Indices of the joints (default: every joint, in order).
+
+        Returns:
+            ``(k, sentence)``: the index into ``angles`` and a sentence naming the joint, the
+            value and its limits (infinite limits never exclude).
+        """
+        idx = np.arange(self.n_joints) if joints is None else np.asarray(joints)
+        values = np.asarray(angles, dtype=np.float64)
+        lo, hi = self.joint_lower[idx], self.joint_upper[idx]
+        outside = np.flatnonzero((values < lo) | (values > hi))
+        if not outside.size:
+            return None
+        k = int(outside[0])
+        return k, (f"joint {self.joint_names[int(idx[k])]!r} = {values[k]:g} is outside its "
+                   f"limits [{lo[k]:g}, {hi[k]:g}]")
+
     def _check_joints(self, joints: Any, name: str) -> FloatArray:
         return as_vector(joints, name, self.n_joints).copy()
 

@@ -349,6 +349,7 @@ class Scenario:
             source=None,
             stack_source=source,
         )
+        check.check_period(scenario.dt)  # the events are then checked against the period
         scenario._check_objects(check)
         scenario._check_hard_set(scenario.make_controller(stack=check))
         return scenario
@@ -357,18 +358,27 @@ class Scenario:
         """Refuse hard constraints that admit no command at ``q0`` (every step would fail).
 
         ``controller`` is one built on a stack of this scenario (the events change tasks only,
-        never the constraints that make the hard set).
+        never the constraints that make the hard set). The message names the constraints in
+        conflict: those without any one of which there is room (one LP each); all of them when
+        no single one is to blame.
 
         Raises:
             ConfigError: at ``constraints``, naming the constraints.
         """
-        problem = controller.assembler.fill(self.model.state(self.q0), 0.0)
-        if not hard_feasible(problem):
-            names = ", ".join(c.name for c in controller.stack.constraints)
-            raise ConfigError(
-                f"the hard constraints ({names}) admit no command at the initial configuration: "
-                "every step would end hard_infeasible; check the sides of the rows against the "
-                "bounds", "constraints")
+        state = self.model.state(self.q0)
+        if hard_feasible(controller.assembler.fill(state, 0.0)):
+            return
+        stack, blamed = controller.stack, []
+        for c in stack.constraints:
+            others = [o for o in stack.constraints if o is not c]
+            trial = self.make_controller(stack=Stack(levels=stack.levels, constraints=others))
+            if hard_feasible(trial.assembler.fill(state, 0.0)):
+                blamed.append(c.name)
+        names = ", ".join(blamed or [c.name for c in stack.constraints])
+        raise ConfigError(
+            f"the hard constraints {names} admit no command together at the initial "
+            "configuration: every step would end hard_infeasible; check the sides of their rows "
+            "against their bounds", "constraints")
 
     def _check_objects(self, stack: Stack) -> None:
         """Build each closed-form scheme once, then apply the events to ``stack``.
@@ -482,15 +492,9 @@ def _initial_configuration(table: Table | None, model: Model) -> FloatArray:
                                       f"got {value:g}", join(path, i))
         if joint_list is not None:
             joints = np.array(joint_list)
-            lower = np.asarray(model.joint_lower)
-            upper = np.asarray(model.joint_upper)
-            for i, value in enumerate(joints):
-                if not lower[i] <= value <= upper[i]:
-                    raise ConfigError(
-                        f"{value:g} rad is outside the limits of joint "
-                        f"{model.joint_names[i]!r} [{lower[i]:g}, {upper[i]:g}]",
-                        join(table.at("joints"), i),
-                    )
+            outside = model.joint_outside_limits(joints)
+            if outside is not None:
+                raise ConfigError(outside[1], join(table.at("joints"), outside[0]))
     try:
         return model.check_configuration(model.configuration(eta, joints))
     except UvmsQpError as exc:

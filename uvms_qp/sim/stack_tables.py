@@ -339,7 +339,8 @@ def apply_events(events: Sequence[Event], stack: Stack) -> None:
 def check_periods(tables: StackTables, stack: Stack, dt: float) -> None:
     """Check every task of ``stack`` against the control period ``dt`` [s].
 
-    (:meth:`~uvms_qp.tasks.Task.check_period`: set-based rows whose gain overshoots.)
+    (:meth:`~uvms_qp.tasks.Task.set_period`: set-based rows whose gain overshoots, error tasks
+    whose error would never settle; the events applied afterwards are checked against ``dt``.)
 
     Raises:
         ConfigError: at the task's field, e.g. ``levels[1].tasks[0].gain``.
@@ -347,6 +348,6 @@ def check_periods(tables: StackTables, stack: Stack, dt: float) -> None:
     for level, items in zip(stack.levels, tables.levels, strict=True):
         for task, item in zip(level.tasks, items, strict=True):
             try:
-                task.check_period(dt)
+                task.set_period(dt)
             except (UvmsQpError, ValueError) as exc:
                 raise _error(exc, item) from exc

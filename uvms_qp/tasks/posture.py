@@ -90,13 +90,9 @@ class PostureTask(ErrorTask):
         Raises:
             InputError: naming the first such joint, the angle and the limits [rad].
         """
-        lo, hi = np.asarray(model.joint_lower)[idx], np.asarray(model.joint_upper)[idx]
-        outside = np.flatnonzero((posture < lo) | (posture > hi))  # never true for infinite limits
-        if outside.size:
-            k = int(outside[0])
-            raise InputError(
-                f"{self.name}.posture: joint {model.joint_names[int(idx[k])]!r} = "
-                f"{posture[k]:g} rad is outside its limits [{lo[k]:g}, {hi[k]:g}] rad")
+        outside = model.joint_outside_limits(posture, idx)
+        if outside is not None:
+            raise InputError(f"{self.name}.posture: {outside[1]}")
 
     def _set_reference(self, value: FloatArray | None) -> None:
         """Set ``q_ref`` (a copy), or None."""

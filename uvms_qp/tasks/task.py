@@ -104,6 +104,19 @@ def as_gain(value: Any, name: str = "gain") -> float | FloatArray:
     return as_scalar(value, name, nonnegative=True)
 
 
+def _fits(side: Any, rows: int) -> bool:
+    """True for a side of ``rows`` values or one value (a number, or an array of shape ())."""
+    shape = getattr(side, "shape", None)
+    if shape is not None:
+        return bool(shape == (rows,) or shape == ())
+    if isinstance(side, int | float):
+        return True
+    try:
+        return len(side) == rows
+    except TypeError:
+        return False
+
+
 def _shape_of(value: Any) -> str:
     """``(r, c)`` of an array, ``None``, or the type of anything else (for error messages)."""
     if value is None:
@@ -157,6 +170,7 @@ class Task(ABC):
         self.weight = as_scalar(weight, f"{self.name}.weight", positive=True)
         self.model: Model | None = None
         self.owner: Any = None
+        self._period: float | None = None  # the control period of the last set_period [s]
         self.dim = 0
         self.row_weights: FloatArray = np.zeros(0)
         self._error: Any = None  # last_error as set (a sequence becomes an array when read)
@@ -264,23 +278,30 @@ class Task(ABC):
         if self._ramping is not None:
             self.advance_activation(t)
         J, lo, hi = self.evaluate(state, t)
-        try:  # free on the happy path
+        try:  # (numpy would broadcast a row or a side of one value into every row)
             if J is not self._written[1] or A is not self._written[0]:
+                if J.shape != A.shape:
+                    raise ValueError
                 A[...] = J
                 self._written = (A, J)
+            rows = A.shape[0]
             if hi is lo:  # equality rows: one write of both sides
+                if not _fits(lo, rows):
+                    raise ValueError
                 sides[...] = lo
             else:
+                if not (_fits(lo, rows) and _fits(hi, rows)):
+                    raise ValueError
                 sides[0] = lo
                 sides[1] = hi
-        except (ValueError, TypeError):
+        except (ValueError, TypeError, AttributeError):
             raise self._shape_error("evaluate", A, J=J, lower=lo, upper=hi) from None
 
     def _shape_error(self, method: str, A: FloatArray, **returned: Any) -> ShapeError:
         """The error for rows of ``method`` that do not fit the task's (dim, nv) slot."""
         dim, nv = A.shape
         got = ", ".join(f"{k} {_shape_of(v)}" for k, v in returned.items())
-        return ShapeError(f"{self.name}: {type(self).__name__}.{method} returned {got}; "
+        return ShapeError(f"task {self.name!r}: {type(self).__name__}.{method} returned {got}; "
                           f"expected J ({dim}, {nv}) and ({dim},) vectors (or numbers) for the "
                           f"other parts ({dim} rows, as bind returned)")
 
@@ -319,14 +340,27 @@ class Task(ABC):
         """Forget the subclass's run-time memory."""
 
     def check_period(self, dt: float) -> None:  # noqa: B027 - optional hook
-        """Check the task against the control period ``dt`` [s] (called by the controller).
+        """Check the task against the control period ``dt`` [s] (see :meth:`set_period`).
 
         Tasks with set-based rows refuse a gain with ``gain * dt > 1``
-        (:func:`check_barrier_gain`), and so do error tasks (:meth:`ErrorTask.check_period`).
+        (:func:`check_barrier_gain`), error tasks one with ``gain * dt >= 2``
+        (:meth:`ErrorTask.check_period`).
 
         Raises:
             InputError: the task's rows would not settle at this period.
         """
+
+    @final
+    def set_period(self, dt: float) -> None:
+        """Check the task against the control period ``dt`` [s] and keep ``dt``.
+
+        Every later :meth:`update` is checked against it too (called by the controller).
+
+        Raises:
+            InputError: the task's rows would not settle at this period.
+        """
+        self.check_period(dt)
+        self._period = dt
 
     def advance_activation(self, t: float) -> float:
         """The activation at time ``t`` [s]: a pending ramp starts at the first call.
@@ -357,10 +391,12 @@ class Task(ABC):
     def update(self, **params: Any) -> None:
         """Change parameters at run time (validated), e.g. ``payload.update(force=20.0)``.
 
-        Subclasses list the parameters they accept in :attr:`updatable`.
+        Subclasses list the parameters they accept in :attr:`updatable`. All or nothing: a
+        rejected value leaves the task as it was.
 
         Raises:
-            InputError: an unknown parameter or an invalid value.
+            InputError: an unknown parameter, an invalid value, or one with which the task's
+                rows would not settle at the controller's period (:meth:`set_period`).
         """
         allowed = self.updatable()
         for key in params:
@@ -368,8 +404,16 @@ class Task(ABC):
                 raise InputError(
                     f"{self.name}.update: unknown parameter {key!r}; known: {', '.join(allowed)}"
                 )
-        for key, value in params.items():
-            self._apply_update(key, value)
+        before = dict(vars(self))
+        try:
+            for key, value in params.items():
+                self._apply_update(key, value)
+            if self._period is not None:  # e.g. a gain that would not settle at this period
+                self.check_period(self._period)
+        except Exception:
+            vars(self).clear()  # all or nothing: the task as it was
+            vars(self).update(before)
+            raise
 
     def updatable(self) -> tuple[str, ...]:
         """Names of the parameters :meth:`update` accepts."""
@@ -468,15 +512,20 @@ class ErrorTask(Task):
         if self._ramping is not None:
             self.advance_activation(t)
         J, e, ff = self.error_rows(state, t)
-        try:  # free on the happy path
+        try:  # (numpy would broadcast a row or an error of one value into every row)
+            shape = A.shape
             if J is not self._written[1] or A is not self._written[0]:
+                if J.shape != shape:
+                    raise ValueError
                 A[...] = J
                 self._written = (A, J)
+            if e.shape != shape[:1] or (ff is not None and ff.shape != shape[:1]):
+                raise ValueError
             side = e * self._gains
             if ff is not None:
                 side += ff
             sides[...] = side  # both sides at once
-        except (ValueError, TypeError):
+        except (ValueError, TypeError, AttributeError):
             raise self._shape_error("error_rows", A, J=J, e=e, ff=ff) from None
         self._error = e
 

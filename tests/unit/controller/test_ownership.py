@@ -55,6 +55,29 @@ def test_a_controller_whose_stack_was_taken_over_refuses_to_step(rov):
     assert second.step(rov.state(rov.home()), 0.0).stage == "primary"
 
 
+def test_a_superseded_controller_cannot_reset_or_bound_the_tasks_it_lost(rov):
+    """Its reset would put the later controller's command-rate bound back at rest."""
+    stack = _stack(rov)
+    first = Controller(rov, stack)
+    second = Controller(rov, stack)
+    state = rov.state(rov.home())
+    second.step(state, 0.0)
+    window = stack.constraints[-1].previous
+    assert np.any(window)  # the second controller has moved away from rest
+    for call in (first.reset, lambda: first.bounds(state)):
+        with pytest.raises(InputError, match="took over"):
+            call()
+    np.testing.assert_array_equal(stack.constraints[-1].previous, window)
+
+
+def test_a_controller_that_fails_to_build_takes_nothing_over(rov):
+    stack = _stack(rov)
+    first = Controller(rov, stack)
+    with pytest.raises(InputError, match="gain"):
+        Controller(rov, stack, dt=1.0)  # the tool gain of 2 would not settle at this period
+    first.step(rov.state(rov.home()), 0.0)
+
+
 def test_a_task_shared_by_two_stacks_serves_the_later_controller_only(rov):
     posture = PostureTask(gain=1.0)
     first = Controller(rov, Stack(levels=[Level(posture)]))

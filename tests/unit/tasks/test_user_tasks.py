@@ -18,17 +18,23 @@ class DepthTask(ErrorTask):
     error_unit = "m"
     rate_unit = "m/s"
 
-    def __init__(self, defect: str = "", **kwargs):
+    def __init__(self, defect: str = "", rows: int = 1, **kwargs):
         super().__init__(**kwargs)
-        self.defect = defect
+        self.defect, self.n_rows = defect, rows
 
     def _bind(self, model):
         self._row = model.eta_names.index("z")
-        return 1
+        return self.n_rows
 
     def error_rows(self, state, t):
-        J = state.vehicle_pose_jacobian()[self._row:self._row + 1]
-        e = np.array([0.5 - state.eta[self._row]])
+        J = np.repeat(state.vehicle_pose_jacobian()[self._row:self._row + 1], self.n_rows, 0)
+        e = np.full(self.n_rows, 0.5 - state.eta[self._row])
+        if self.defect == "one_row":  # numpy would broadcast these into every row
+            return J[:1], e, None
+        if self.defect == "flat":
+            return J[0], e, None
+        if self.defect == "one_error":
+            return J, e[:1], None
         if self.defect == "columns":
             J = J[:, :-1]
         elif self.defect == "rows":
@@ -70,12 +76,26 @@ class SurgeFloor(Task):
 ])
 def test_error_rows_of_the_wrong_shape_name_the_task_and_the_expected_shape(rov, defect, shown):
     controller = Controller(rov, Stack(levels=[Level(DepthTask(defect=defect))]))
-    with pytest.raises(ShapeError, match=r"^depth: DepthTask\.error_rows returned .*" + shown):
+    with pytest.raises(ShapeError,
+                       match=r"^task 'depth': DepthTask\.error_rows returned .*" + shown):
         controller.step(rov.state(rov.home()), 0.0)
 
 
 @pytest.mark.parametrize("defect, shown", [
-    ("columns", r"^surge_floor: SurgeFloor\.evaluate returned J \(1, 3\).*expected J \(1, 10\)"),
+    ("one_row", r"J \(1, 10\), e \(2,\)"),
+    ("flat", r"J \(10,\)"),
+    ("one_error", r"e \(1,\)"),
+])
+def test_rows_that_numpy_would_broadcast_are_refused_too(rov, defect, shown):
+    controller = Controller(rov, Stack(levels=[Level(DepthTask(defect=defect, rows=2))]))
+    with pytest.raises(ShapeError, match=r"DepthTask\.error_rows returned .*" + shown +
+                       r".*expected J \(2, 10\)"):
+        controller.step(rov.state(rov.home()), 0.0)
+
+
+@pytest.mark.parametrize("defect, shown", [
+    ("columns", r"^task 'surge_floor': SurgeFloor\.evaluate returned J \(1, 3\).*"
+                r"expected J \(1, 10\)"),
     ("sides", r"lower \(2,\), upper \(\)"),
 ])
 def test_evaluated_rows_of_the_wrong_shape_name_the_task(rov, defect, shown):

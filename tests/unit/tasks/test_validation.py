@@ -429,8 +429,8 @@ def test_a_posture_outside_the_joint_limits_names_the_joint_the_angle_and_the_li
     beyond = inside.copy()
     beyond[2] = upper[2] + 0.1
     joint = rov.joint_names[2]
-    message = (f"reach.posture: joint {joint!r} = {beyond[2]:g} rad is outside its limits "
-               f"[{lower[2]:g}, {upper[2]:g}] rad")
+    message = (f"reach.posture: joint {joint!r} = {beyond[2]:g} is outside its limits "
+               f"[{lower[2]:g}, {upper[2]:g}]")
     with pytest.raises(InputError, match=re.escape(message)):
         PostureTask(posture=beyond, name="reach").bind(rov)
     task = PostureTask(posture=inside, name="reach").bind(rov)
@@ -442,7 +442,7 @@ def test_a_posture_outside_the_joint_limits_names_the_joint_the_angle_and_the_li
     # a joint without limits accepts any angle
     free = Model.from_dh([DHRow(a=0.3), DHRow(a=0.2, lower=-1.0, upper=1.0)], vehicle="planar")
     PostureTask(posture=[10.0, 0.5]).bind(free)
-    with pytest.raises(InputError, match=r"joint '\w+' = 2 rad is outside its limits \[-1, 1\]"):
+    with pytest.raises(InputError, match=r"joint '\w+' = 2 is outside its limits \[-1, 1\]"):
         PostureTask(posture=[10.0, 2.0]).bind(free)
 
 class _TupleTrajectory:
