@@ -1,0 +1,47 @@
+"""The benchmark table: cells, footnotes and failure lines say what the numbers are."""
+
+from __future__ import annotations
+
+from uvms_qp.bench.metrics import summarize
+from uvms_qp.bench.record import OWN_PROBLEM, SATURATED, Record
+from uvms_qp.bench.report import HEADERS, failure_lines, footnotes, markdown_table, table_rows
+
+
+def _rec(solver, problem, times, set_="raw", note=""):
+    return Record(set_, problem, solver, trials=len(times), successes=len(times),
+                  times_us=[float(t) for t in times], note=note)
+
+
+def _cells(line):
+    return dict(zip(HEADERS, table_rows([line])[0], strict=True))
+
+
+def test_a_tail_percentile_from_too_few_samples_is_not_printed():
+    few, many = summarize([_rec("daqp", "p1", range(1, 31))])[0], summarize(
+        [_rec("daqp", "p1", range(1, 101))])[0]
+    assert _cells(few)["p99 us"] == "n/a" and _cells(few)["p95 us"] == "28.5"
+    assert _cells(few)["timed"] == "30"
+    assert _cells(many)["p99 us"] == "99.0"
+    assert any("a p99 100" in note for note in footnotes([few]))
+    assert footnotes([many]) == []
+
+
+def test_a_row_of_its_own_problem_is_marked_and_explained():
+    lines = summarize([_rec("daqp", "s1", [100, 100], "scenarios"),
+                       _rec("pink", "s1", [50, 50], "scenarios", note=OWN_PROBLEM)])
+    daqp, pink = (_cells(line) for line in lines)
+    assert pink["solver"] == "pink*" and pink["x daqp"] == "-" and pink["SGM"] == "-"
+    assert daqp["x pink"] == "-" and daqp["SGM"] == "1.00"
+    notes = footnotes(lines)
+    assert any(n.startswith("* scenarios/pink solves its own, smaller problem") for n in notes)
+    table = markdown_table(lines)
+    assert "| scenarios | pink* |" in table and "- * scenarios/pink" in table
+
+
+def test_failure_line_names_the_saturated_closed_form():
+    rec = _rec("nullspace", "p1", [5, 5], note=SATURATED)
+    rec.successes, rec.failures = 0, {"unproven": 2}
+    line = summarize([rec, _rec("nullspace", "p2", [5, 5])])[0]
+    assert failure_lines([line]) == [
+        "raw/nullspace: 2 failed of 4 (unproven x2; closed form saturated into the hard box on "
+        "1 of 2 problems)"]
