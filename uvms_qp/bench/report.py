@@ -253,7 +253,10 @@ def print_table(summaries: list[Summary], console: Any = None, title: str = "") 
     table = Table(title=title or "uvms-qp bench", header_style="bold", box=box.SIMPLE_HEAD,
                   pad_edge=False, show_edge=False, collapse_padding=True, title_justify="left")
     for h in TERMINAL_HEADERS:
-        table.add_column(h, justify="left" if h == "solver" else "right", no_wrap=True)
+        if h == "solver":  # a long scheme name folds onto a second line; numbers never do
+            table.add_column(h, justify="left", overflow="fold", ratio=1)
+        else:
+            table.add_column(h, justify="right", no_wrap=True)
     previous = None
     for row, s in zip(table_rows(summaries), [s for s in summaries if s.trials], strict=True):
         if s.set != previous:

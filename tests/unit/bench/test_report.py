@@ -2,9 +2,21 @@
 
 from __future__ import annotations
 
+import io
+
+from rich.console import Console
+
 from uvms_qp.bench.metrics import summarize
 from uvms_qp.bench.record import OWN_PROBLEM, SATURATED, Record
-from uvms_qp.bench.report import HEADERS, failure_lines, footnotes, markdown_table, table_rows
+from uvms_qp.bench.report import (
+    HEADERS,
+    TERMINAL_WIDTH,
+    failure_lines,
+    footnotes,
+    markdown_table,
+    print_table,
+    table_rows,
+)
 
 
 def _rec(solver, problem, times, set_="raw", note=""):
@@ -45,3 +57,19 @@ def test_failure_line_names_the_saturated_closed_form():
     assert failure_lines([line]) == [
         "raw/nullspace: 2 failed of 4 (unproven x2; closed form saturated into the hard box on "
         "1 of 2 problems)"]
+
+
+def test_terminal_table_folds_a_long_scheme_name_and_cuts_no_number():
+    """The longest scheme names do not fit the solver column of a 100-wide terminal: the name
+    folds onto a second line, and no cell is cut with an ellipsis."""
+    long_name = "scheme:wang_fuzzy_gradient_projection_euclidean"
+    rec = _rec(long_name, "s1", [123456.7] * 150, "scenarios")
+    rec.trials, rec.successes, rec.failures = 1800, 937, {"unproven": 863}
+    lines = summarize([_rec("daqp", "s1", [100.0] * 150, "scenarios"), rec])
+    console = Console(width=TERMINAL_WIDTH, file=io.StringIO(), record=True)
+    print_table(lines, console)
+    text = console.export_text()
+    assert "\u2026" not in text
+    assert max(len(line) for line in text.splitlines()) <= TERMINAL_WIDTH
+    assert "937/1800 863u" in text and "123456.7" in text
+    assert long_name in "".join(line.split()[0] for line in text.splitlines() if line.split())
