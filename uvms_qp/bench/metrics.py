@@ -4,11 +4,14 @@ Definitions (times in microseconds):
 
 * success rate: verified successes / trials, over every problem of the set the solver applies to
   (a closed-loop scenario contributes one trial per control step);
-* median / p95 / p99 / max: over every timed trial of the set;
+* median / p95 / p99 / max: over every timed trial of the set; a tail percentile from fewer
+  samples than it needs (:func:`~uvms_qp.bench.record.tail_samples`: 20 for p95, 100 for p99) is
+  NaN, not the maximum under another name;
 * shifted geometric mean (qpbenchmark's ranking): ``SGM = prod_i (t_i + s)^(1/N) - s`` over the
   N problems of the set (``t_i`` the per-problem median time, shift ``s = 10 us``); a problem with
   any failed trial counts with the penalty time ``10 x`` the slowest per-problem median of the set;
-  the column reports ``SGM / min SGM`` of the set (1.0 = fastest);
+  the column reports ``SGM / min SGM`` of the set (1.0 = fastest), rows that solved their own
+  problem (:data:`~uvms_qp.bench.record.OWN_PROBLEM`) neither setting nor getting it;
 * per-level optimality gap: for a problem whose answers share a reference (``random`` and ``raw``),
   the best solution found is the lexicographic minimum of the level violation vectors over every
   verified success (levels compared to ``GAP_TOL`` relative); a row's gap is the largest excess
@@ -19,7 +22,8 @@ Definitions (times in microseconds):
 * accuracy tiers (as qpbenchmark's high/low accuracy): share of problems solved (every trial
   verified) with gap <= 1e-6 (high) and <= 1e-3 (low);
 * ratio vs daqp / vs Pink: median over the problems both ran of the per-problem ratio of median
-  times.
+  times, leaving out the problems where either row solved its own problem (NaN when none is
+  left).
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .record import Record, percentile
+from .record import OWN_PROBLEM, SATURATED, Record, percentile, tail_percentile
 
 #: Shift of the shifted geometric mean [us].
 SGM_SHIFT_US = 10.0
@@ -64,6 +68,7 @@ class Summary:
     trials: int = 0
     successes: int = 0
     failures: dict[str, int] = field(default_factory=dict)
+    timed: int = 0
     median_us: float = math.nan
     p95_us: float = math.nan
     p99_us: float = math.nan
@@ -80,6 +85,8 @@ class Summary:
     vs_pink: float = math.nan
     backend_us: float = math.nan
     not_applicable: int = 0
+    own_problem: bool = False
+    saturated: int = 0
 
     @property
     def success_rate(self) -> float:
@@ -119,11 +126,17 @@ def _solved(record: Record) -> bool:
     return record.trials > 0 and record.successes == record.trials
 
 
+def _own_problem(record: Record) -> bool:
+    return record.note.startswith(OWN_PROBLEM)
+
+
 def _paired_ratio(rows: dict[str, Record], ref: dict[str, Record]) -> float:
     ratios = []
     for problem, rec in rows.items():
         other = ref.get(problem)
         if other is None or not rec.times_us or not other.times_us:
+            continue
+        if _own_problem(rec) or _own_problem(other):
             continue
         a, b = _median_time(rec), _median_time(other)
         if b > 0.0:
@@ -157,9 +170,12 @@ def summarize(records: Iterable[Record]) -> list[Summary]:
                 line.vs_pink = _paired_ratio(solvers[solver], solvers["pink"])
             elif solver == "pink":
                 line.vs_pink = 1.0
-        fastest = min((ln.sgm for ln in lines.values() if not math.isnan(ln.sgm)), default=math.nan)
+        fastest = min((ln.sgm for ln in lines.values()
+                       if not math.isnan(ln.sgm) and not ln.own_problem), default=math.nan)
         for line in lines.values():
-            if fastest and not math.isnan(fastest):
+            if line.own_problem:  # another problem: no ratio to the rows of the set
+                line.vs_daqp = line.vs_pink = math.nan
+            elif fastest and not math.isnan(fastest):
                 line.sgm_ratio = (line.sgm + SGM_SHIFT_US) / (fastest + SGM_SHIFT_US)
         out.extend(lines.values())
     rank = {key: i for i, key in enumerate(order)}
@@ -177,7 +193,7 @@ def _references(solvers: dict[str, dict[str, Record]]) -> tuple[dict[str, list[f
             if rec.levels is None or not _solved(rec) or solver in NOT_REFERENCE:
                 continue
             vectors[problem].append(rec.levels)
-            if solver == "nullspace" and not rec.note.startswith("saturated"):
+            if solver == "nullspace" and not rec.note.startswith(SATURATED):
                 null[problem] = rec.levels
     return {p: _lexicographic_best(v) for p, v in vectors.items()}, null
 
@@ -197,6 +213,8 @@ def _summarize_solver(set_name: str, solver: str, rows: dict[str, Record],
             line.not_applicable += 1
             continue
         line.problems += 1
+        line.own_problem |= _own_problem(rec)
+        line.saturated += int(rec.note.startswith(SATURATED))
         line.trials += rec.trials
         line.successes += rec.successes
         for reason, count in rec.failures.items():
@@ -218,10 +236,11 @@ def _summarize_solver(set_name: str, solver: str, rows: dict[str, Record],
             if solved and problem in null:
                 null_gaps.append(max(abs(a - b) for a, b in zip(rec.levels, null[problem],
                                                                 strict=False)))
+    line.timed = len(times)
     if times:
         line.median_us = percentile(times, 50)
-        line.p95_us = percentile(times, 95)
-        line.p99_us = percentile(times, 99)
+        line.p95_us = tail_percentile(times, 95)
+        line.p99_us = tail_percentile(times, 99)
         line.max_us = max(times)
     line.sgm = shifted_geometric_mean(sgm_values)
     if gaps:

@@ -23,7 +23,7 @@ from typing import Any
 
 from ..errors import InputError
 from .metrics import TIERS, Summary
-from .record import CSV_COLUMNS, HARD_TOL, Record
+from .record import CSV_COLUMNS, HARD_TOL, OWN_PROBLEM, Record, tail_samples
 
 JSON_FORMAT = "uvms-qp-bench/1"
 
@@ -153,9 +153,17 @@ def _fmt(value: float, spec: str = ".3g") -> str:
 
 
 HEADERS: tuple[str, ...] = (
-    "set", "solver", "success", "unproven", "median us", "p95 us", "p99 us", "max us", "C us",
-    "SGM", "x daqp", "x pink", "hard viol", "gap best", "gap null", "acc hi/lo", "NaN",
+    "set", "solver", "success", "unproven", "timed", "median us", "p95 us", "p99 us", "max us",
+    "C us", "SGM", "x daqp", "x pink", "hard viol", "gap best", "gap null", "acc hi/lo", "NaN",
 )
+#: Marker after the name of a row that solved its own, smaller problem (see :func:`footnotes`).
+OWN_MARK = "*"
+#: A tail percentile from fewer samples than it needs.
+TOO_FEW = "n/a"
+
+
+def _tail(value: float, q: float, timed: int) -> str:
+    return TOO_FEW if 0 < timed < tail_samples(q) else _fmt(value, ".1f")
 
 
 def table_rows(summaries: list[Summary]) -> list[list[str]]:
@@ -166,10 +174,10 @@ def table_rows(summaries: list[Summary]) -> list[list[str]]:
             continue
         tiers = "/".join(_fmt(100 * s.tiers[t], ".0f") for t in TIERS) if s.tiers else "-"
         rows.append([
-            s.set, s.solver,
+            s.set, s.solver + (OWN_MARK if s.own_problem else ""),
             f"{s.success_rate:.3f} ({s.successes}/{s.trials})",
-            str(s.failures.get("unproven", 0)),
-            _fmt(s.median_us, ".1f"), _fmt(s.p95_us, ".1f"), _fmt(s.p99_us, ".1f"),
+            str(s.failures.get("unproven", 0)), str(s.timed),
+            _fmt(s.median_us, ".1f"), _tail(s.p95_us, 95, s.timed), _tail(s.p99_us, 99, s.timed),
             _fmt(s.max_us, ".0f"), _fmt(s.backend_us, ".1f"), _fmt(s.sgm_ratio, ".2f"),
             _fmt(s.vs_daqp, ".2f"), _fmt(s.vs_pink, ".2f"),
             _fmt(s.claimed_violation, ".1e"), _fmt(s.gap, ".1e"), _fmt(s.gap_nullspace, ".1e"),
@@ -179,15 +187,39 @@ def table_rows(summaries: list[Summary]) -> list[list[str]]:
 
 
 def failure_lines(summaries: list[Summary]) -> list[str]:
-    """One line per (set, solver) with failures: ``set/solver: reason xN, ...``."""
+    """One line per (set, solver) with failures: ``set/solver: reason xN, ...``.
+
+    A closed form whose answers were clipped into the box says on how many problems: its
+    ``unproven`` failures are those clipped answers, which the certificate could not prove.
+    """
     out = []
     for s in summaries:
         if s.failures:
             parts = ", ".join(f"{k} x{v}" for k, v in sorted(s.failures.items(),
                                                              key=lambda kv: -kv[1]))
+            if s.saturated:
+                parts += (f"; closed form saturated into the hard box on {s.saturated} of "
+                          f"{s.problems} problems")
             out.append(f"{s.set}/{s.solver}: {s.trials - s.successes} failed of {s.trials} "
                        f"({parts})")
     return out
+
+
+def footnotes(summaries: list[Summary]) -> list[str]:
+    """Notes the table needs: percentiles left out for want of samples, rows of another problem."""
+    notes = []
+    shown = [s for s in summaries if s.trials]
+    if any(0 < s.timed < tail_samples(99) for s in shown):
+        notes.append(f"{TOO_FEW}: a p95 needs {tail_samples(95)} timed samples, a p99 "
+                     f"{tail_samples(99)} (fewer give the maximum); a closed loop's first step "
+                     f"is a warm-up, verified but not timed.")
+    for s in shown:
+        if s.own_problem:
+            notes.append(f"{OWN_MARK} {s.set}/{s.solver} solves its own, smaller problem there "
+                         f"({OWN_PROBLEM[len('own problem: '):]}, not the stack of the set's "
+                         f"other rows): its success is on that problem, and it has no time ratio "
+                         f"to them.")
+    return notes
 
 
 #: Columns of the terminal table (of :data:`HEADERS`): it fits :data:`TERMINAL_WIDTH` columns;
@@ -221,7 +253,10 @@ def print_table(summaries: list[Summary], console: Any = None, title: str = "") 
     table = Table(title=title or "uvms-qp bench", header_style="bold", box=box.SIMPLE_HEAD,
                   pad_edge=False, show_edge=False, collapse_padding=True, title_justify="left")
     for h in TERMINAL_HEADERS:
-        table.add_column(h, justify="left" if h == "solver" else "right", no_wrap=True)
+        if h == "solver":  # a long scheme name folds onto a second line; numbers never do
+            table.add_column(h, justify="left", overflow="fold", ratio=1)
+        else:
+            table.add_column(h, justify="right", no_wrap=True)
     previous = None
     for row, s in zip(table_rows(summaries), [s for s in summaries if s.trials], strict=True):
         if s.set != previous:
@@ -242,6 +277,8 @@ def print_table(summaries: list[Summary], console: Any = None, title: str = "") 
                   "hard viol = largest hard-row violation of a claimed success; gap best = "
                   "largest per-level optimality gap to the best answer. All columns: "
                   "--markdown FILE or --csv FILE.", markup=False, highlight=False)
+    for note in footnotes(summaries):
+        console.print(note, markup=False, highlight=False)
     lines = failure_lines(summaries)
     if lines:
         console.print("[bold]failures (counted, by reason)[/bold]")
@@ -253,6 +290,9 @@ def markdown_table(summaries: list[Summary]) -> str:
     """The table in GitHub markdown (for ``benchmarks/README.md``)."""
     lines = ["| " + " | ".join(HEADERS) + " |", "|" + "---|" * len(HEADERS)]
     lines += ["| " + " | ".join(row) + " |" for row in table_rows(summaries)]
+    notes = footnotes(summaries)
+    if notes:
+        lines += [""] + [f"- {note}" for note in notes]
     return "\n".join(lines)
 
 

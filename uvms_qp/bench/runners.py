@@ -7,21 +7,27 @@ A :class:`Runner` turns one :class:`~uvms_qp.bench.sets.BenchProblem` into one
   (:class:`~uvms_qp.controller.Controller` on UVMS problems, :class:`~uvms_qp.hqp.HierarchySolver`
   on raw ones);
 * ``nullspace``: the closed-form recursive null-space scheme
-  (Soylu et al. (2007), Eq. (10)), on problems whose levels are all equalities;
+  (Soylu et al. (2007), Eq. (10)), on problems whose levels are all equalities, its answer
+  saturated into the hard box as the controller's ``scheme="nullspace"`` does (a closed form cannot
+  enforce the box: a clipped answer is ``unproven`` unless the certificate proves it);
 * ``weighted``: the same stack as ONE weighted QP (level ``k`` of ``p`` weighted by
   ``1e4 ** (p - 1 - k)``), solved by ``cascade:daqp`` (a plain QP: as soft weights of one DAQP
   level, the priority weights would span more orders than its soft-row regularisation resolves);
 * ``scheme:<name>``: the papers' closed-form schemes (:data:`uvms_qp.schemes.SCHEME_TYPES`) on the
   scenarios that name them;
 * ``pink``: Pink differential IK (optional) on the problems it can express
-  (:mod:`uvms_qp.bench.pink_adapter`).
+  (:mod:`uvms_qp.bench.pink_adapter`): the one-level random problems as they are; on a scenario,
+  its own smaller problem (the tracked frame and a posture cost, one weighted level), so its
+  scenario rows carry the note :data:`~uvms_qp.bench.record.OWN_PROBLEM`.
 
 Timing: a UVMS trial is a full control step, state update included (``model.state(q)`` then
 ``step``; Pink: ``Configuration`` then ``solve_ik``); a raw trial is one
-``HierarchySolver.solve`` call (validation included). Set-up and one warm-up call are not timed.
+``HierarchySolver.solve`` call (validation included). Set-up and one warm-up call are not timed:
+on a random or raw problem an extra first call, in a closed-loop scenario the first control step
+(verified and counted as a trial like every step, its time kept in ``info["first_step_us"]``).
 
 Verification (whatever the back-end claims): a trial succeeds when the answer is finite, the
-status is ``optimal`` or ``level_infeasible``, and every hard row (box and inequalities,
+status is one of :data:`OK_STATUSES`, and every hard row (box and inequalities,
 recomputed from the constraints) holds to :data:`~uvms_qp.bench.record.HARD_TOL`. Any exception
 is caught, counted as a failure of every trial it prevented, and attributed by its type.
 
@@ -51,7 +57,7 @@ from ..schemes import SCHEME_TYPES, build_scheme
 from ..sim.runner import simulate
 from ..sim.scenario import load_scenario
 from .pink_adapter import PinkController, pink_available, pink_supported, position_gain, rate_box
-from .record import HARD_TOL, Record
+from .record import HARD_TOL, OWN_PROBLEM, SATURATED, Record
 from .sets import BenchProblem
 
 #: Weight ratio between consecutive levels of the ``weighted`` runner.
@@ -62,8 +68,6 @@ WEIGHTED_BACKEND = "cascade:daqp"
 #: Statuses of a verified answer: the lexicographic optimum, or the controller's damped or blended
 #: one (the optimum of the stack with damping rows near a singularity; tasks ramping).
 OK_STATUSES = ("optimal", "level_infeasible", "damped", "blended")
-#: Note of a null-space answer clipped into the box (then not a lexicographic reference).
-SATURATED = "saturated into the hard box"
 
 
 # ------------------------------------------------------------------------------- verification
@@ -200,9 +204,11 @@ class Runner:
                           duration=steps * scenario.dt)
         record.info.update({"model": scenario.model.name, "steps": result.steps,
                             "dt": scenario.dt})
-        record.times_us = [t * 1e6 for t in timed.times]
-        if timed.backend:
-            record.backend_us = float(np.median(timed.backend))
+        if timed.times:  # the first step is the warm-up: verified below, not timed
+            record.info["first_step_us"] = timed.times[0] * 1e6
+        record.times_us = [t * 1e6 for t in timed.times[1:]]
+        if len(timed.backend) > 1:
+            record.backend_us = float(np.median(timed.backend[1:]))
         record.trials = result.steps
         record.nan_count = int(result.nan_steps)
         record.fail("nan", result.nan_steps)
@@ -248,7 +254,7 @@ class Runner:
         if backend:
             record.backend_us = float(np.median(backend))
         if getattr(result, "saturated", False):
-            record.note = SATURATED
+            _mark_saturated(record)
         if result is not None and np.all(np.isfinite(result.zeta)):
             record.levels = level_norms(reference, np.asarray(result.zeta, dtype=float))
 
@@ -277,8 +283,16 @@ class Runner:
                 backend.append(c_time * 1e6)
         if backend:
             record.backend_us = float(np.median(backend))
+        if result is not None and (result.info or {}).get("clipped"):
+            _mark_saturated(record)
         if result is not None and np.all(np.isfinite(result.x)):
             record.levels = level_norms(_raw_reference_rows(problem), np.asarray(result.x))
+
+
+def _mark_saturated(record: Record) -> None:
+    """Note that the row's answer was clipped into the box (keeping the status message)."""
+    if not record.note.startswith(SATURATED):
+        record.note = f"{SATURATED}; {record.note}" if record.note else SATURATED
 
 
 class _TimedStep:
@@ -386,7 +400,9 @@ class NullspaceRunner(Runner):
         return Controller(draw.model, draw.stack, dt=draw.dt, scheme="nullspace")
 
     def _raw_solver(self, problem: BenchProblem) -> Any:
-        return HierarchySolver("nullspace")
+        solver = HierarchySolver("nullspace")
+        solver.saturate = True  # as the controller's scheme: the command is the clipped answer
+        return solver
 
 
 class WeightedRunner(Runner):
@@ -461,6 +477,13 @@ class PinkRunner(Runner):
         if task is None or trajectory is None:
             return "no tracked frame with a trajectory"
         return pink_supported(scenario.model, task.frame)
+
+    def run(self, problem: BenchProblem, repetitions: int) -> Record:
+        """See :meth:`Runner.run`; a scenario row is noted as Pink's own, smaller problem."""
+        record = super().run(problem, repetitions)
+        if problem.kind == "scenario" and record.applicable:
+            record.note = f"{OWN_PROBLEM}; {record.note}" if record.note else OWN_PROBLEM
+        return record
 
     def _scenario_controller(self, scenario: Any, stack: Any) -> Any:
         task, trajectory = _tracking(scenario, stack)

@@ -1,11 +1,14 @@
 """``uvms-qp bench``: every solver and scheme on scenarios, random UVMS problems, raw hierarchies.
 
-Sets: ``scenarios`` (every bundled scenario in closed loop, each control step timed),
+Sets: ``scenarios`` (every bundled scenario in closed loop, each control step a trial),
 ``random`` (seeded random UVMS control problems), ``raw`` (``solve_hierarchy`` problems with
 levels [6, 3, 1, 4] at n = 10, 13, 30). Solvers: ``daqp``, every installed ``cascade:*``,
-``nullspace``, ``weighted`` (one weighted QP), ``scheme:*`` (the papers' closed-form schemes)
-and ``pink`` (when ``pin-pink`` is installed). A success is verified: finite, status optimal or
-level_infeasible, hard rows within 1e-7; every failure is counted with its reason.
+``nullspace`` (the closed form, saturated into the box), ``weighted`` (one weighted QP),
+``scheme:*`` (the papers' closed-form schemes) and ``pink`` (when ``pin-pink`` is installed; on a
+scenario it solves its own, smaller problem: its row is marked ``*`` and has no time ratio). A
+success is verified: finite, status optimal, level_infeasible, damped or blended, hard rows within
+1e-7; every failure is counted with its reason. A closed loop's first step is a warm-up (verified,
+not timed); a p95 / p99 from fewer than 20 / 100 timed samples is printed n/a.
 
 ``--json``/``--csv`` append to existing files and skip the (set, problem, solver) rows already
 there, so an interrupted run resumes. The terminal table has the main columns and fits 100

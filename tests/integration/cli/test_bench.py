@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from uvms_qp.bench.pink_adapter import pink_available
 from uvms_qp.bench.record import CSV_COLUMNS
 from uvms_qp.bench.report import HEADERS, TERMINAL_HEADERS, TERMINAL_WIDTH
 from uvms_qp.bench.runners import runner_names
@@ -110,6 +111,22 @@ def test_quick_smoke_run_fits_100_columns_with_progress_lines_when_piped(capsys,
     assert header.split() == " ".join(TERMINAL_HEADERS).split()
     # every column in the markdown table
     assert markdown.read_text().splitlines()[0] == "| " + " | ".join(HEADERS) + " |"
+    # 15 steps per scenario, 3 solves per problem: too few samples for a p99 anywhere
+    def cell(cells, header):  # counted from the right: "9/27 18u" is two words
+        return cells[TERMINAL_HEADERS.index(header) - len(TERMINAL_HEADERS)]
+
+    rows = [line.split() for line in out.splitlines()
+            if line.split() and line.split()[0] in ("daqp", "nullspace")]
+    assert len(rows) == 6 and all(cell(r, "p99 us") == "n/a" for r in rows)
+    assert "a p99 100" in out
+    # the closed form's answers clipped into the box are unproven, not back-end errors
+    null_raw = next(line for line in out.splitlines() if "raw/nullspace:" in line)
+    assert "unproven x" in null_raw and "backend_error" not in out
+    assert "saturated into the hard box" in out
+    if pink_available():  # Pink's own, smaller problem on the scenarios: marked, no ratio
+        pink = next(line.split() for line in out.splitlines() if line.startswith("pink*"))
+        assert cell(pink, "x daqp") == "-"
+        assert "* scenarios/pink solves its own, smaller problem" in " ".join(out.split())
     # no terminal: progress as lines on stderr, the first row and the last one included
     lines = [line for line in captured.err.splitlines() if line.startswith("bench: ")]
     assert lines[0].startswith("bench: 1/") and "scenarios/" in lines[0]

@@ -1,4 +1,4 @@
-"""Aggregation of benchmark rows: ranking, lexicographic gaps, ratios, row round trips."""
+"""Aggregation of benchmark rows: ranking, gaps, ratios, percentiles, row round trips."""
 
 from __future__ import annotations
 
@@ -13,7 +13,13 @@ from uvms_qp.bench.metrics import (
     shifted_geometric_mean,
     summarize,
 )
-from uvms_qp.bench.record import Record
+from uvms_qp.bench.record import (
+    OWN_PROBLEM,
+    SATURATED,
+    Record,
+    tail_percentile,
+    tail_samples,
+)
 
 
 def test_shifted_geometric_mean_matches_definition():
@@ -79,3 +85,51 @@ def test_record_round_trips_through_csv_and_json():
         assert back.times_us == pytest.approx(r.times_us)
         assert back.levels == pytest.approx(r.levels, rel=1e-11)
         assert math.isnan(back.backend_us) and back.trials == back.successes + back.failed
+
+
+def test_tail_percentiles_need_enough_samples():
+    """A p99 of fewer than 100 samples (a p95 of fewer than 20) is the maximum under another
+    name: it is not reported."""
+    assert tail_samples(95) == 20 and tail_samples(99) == 100
+    few = [float(v) for v in range(1, 31)]
+    assert math.isnan(tail_percentile(few, 99))
+    assert tail_percentile(few, 95) == pytest.approx(np.percentile(few, 95))
+    many = [float(v) for v in range(1, 101)]
+    assert tail_percentile(many, 99) == pytest.approx(99.01)
+    line = summarize([_rec("daqp", "p1", few)])[0]
+    assert line.timed == 30 and line.median_us == 15.5 and line.max_us == 30.0
+    assert math.isnan(line.p99_us) and not math.isnan(line.p95_us)
+    row = _rec("daqp", "p1", few[:10]).to_row()
+    assert row["p95_us"] == "nan" and float(row["median_us"]) == 5.5
+
+
+def test_a_row_of_its_own_problem_gets_no_ratio_and_sets_no_ranking():
+    """Pink on a scenario solves the tracked frame alone: no time ratio against the stack."""
+    recs = [
+        _rec("daqp", "s1", [100, 100], set_="scenarios"),
+        _rec("slow", "s1", [300, 300], set_="scenarios"),
+        _rec("pink", "s1", [50, 50], set_="scenarios"),
+        _rec("daqp", "u1", [10, 10], set_="random"),
+        _rec("pink", "u1", [20, 20], set_="random"),
+    ]
+    recs[2].note = OWN_PROBLEM
+    by = {(s.set, s.solver): s for s in summarize(recs)}
+    pink = by["scenarios", "pink"]
+    assert pink.own_problem and pink.success_rate == 1.0
+    assert math.isnan(pink.vs_daqp) and math.isnan(pink.sgm_ratio)
+    assert math.isnan(by["scenarios", "daqp"].vs_pink)
+    assert by["scenarios", "daqp"].sgm_ratio == pytest.approx(1.0)  # not pink's faster time
+    assert by["scenarios", "slow"].vs_daqp == pytest.approx(3.0)
+    # the same solver on a problem it solves as the others do keeps its ratios
+    assert not by["random", "pink"].own_problem
+    assert by["random", "pink"].vs_daqp == pytest.approx(2.0)
+
+
+def test_saturated_rows_are_counted_and_never_the_nullspace_reference():
+    clipped = _rec("nullspace", "p1", [5, 5], levels=[0.0, 9.0])
+    clipped.note = SATURATED
+    exact = _rec("nullspace", "p2", [5, 5], levels=[0.0, 1.0])
+    others = [_rec("daqp", p, [1, 1], levels=[0.0, 1.0]) for p in ("p1", "p2")]
+    by = {s.solver: s for s in summarize([clipped, exact, *others])}
+    assert by["nullspace"].saturated == 1
+    assert by["daqp"].gap_nullspace == 0.0  # compared on p2 only (on p1 it would be 8)
