@@ -162,8 +162,9 @@ OWN_MARK = "*"
 TOO_FEW = "n/a"
 
 
-def _tail(value: float, q: float, timed: int) -> str:
-    return TOO_FEW if 0 < timed < tail_samples(q) else _fmt(value, ".1f")
+def _tail(value: float, timed: int) -> str:
+    """A tail percentile: NaN with timed samples means too few of them (``tail_percentile``)."""
+    return TOO_FEW if timed and math.isnan(value) else _fmt(value, ".1f")
 
 
 def table_rows(summaries: list[Summary]) -> list[list[str]]:
@@ -177,7 +178,7 @@ def table_rows(summaries: list[Summary]) -> list[list[str]]:
             s.set, s.solver + (OWN_MARK if s.own_problem else ""),
             f"{s.success_rate:.3f} ({s.successes}/{s.trials})",
             str(s.failures.get("unproven", 0)), str(s.timed),
-            _fmt(s.median_us, ".1f"), _tail(s.p95_us, 95, s.timed), _tail(s.p99_us, 99, s.timed),
+            _fmt(s.median_us, ".1f"), _tail(s.p95_us, s.timed), _tail(s.p99_us, s.timed),
             _fmt(s.max_us, ".0f"), _fmt(s.backend_us, ".1f"), _fmt(s.sgm_ratio, ".2f"),
             _fmt(s.vs_daqp, ".2f"), _fmt(s.vs_pink, ".2f"),
             _fmt(s.claimed_violation, ".1e"), _fmt(s.gap, ".1e"), _fmt(s.gap_nullspace, ".1e"),
