@@ -260,13 +260,15 @@ def test_a_damped_problem_past_the_deadline_goes_to_no_other_back_end(monkeypatc
     monkeypatch.setattr(controller.safe.alternate, "solve_problem",
                         lambda problem: pytest.fail("the alternate ran past the deadline")
                         if problem is not own else alternate_solve(problem))
-    q, late = model.home(), 0
+    q, late, said = model.home(), 0, 0
     for k in range(100):
         result = controller.step(model.state(q), k * DT)
         assert not result.damped_levels
         late += result.deadline_missed
+        said += any(a.startswith("damping: the step's deadline passed") for a in result.attempts)
         q = model.integrate(q, result.zeta, DT)
     assert late > 50  # every step whose damped problem the primary tried
+    assert said == late  # and each says why its damping is missing
 
 
 def test_a_damped_problem_no_back_end_answers_is_reported(monkeypatch):

@@ -176,8 +176,11 @@ class _StackScheme:
         if again is None:
             if not ladder:
                 return None, problem, None
-            # no back-end answered the damped problem: the undamped answer, said so
-            note = "damping: no back-end answered the damped problem; the undamped answer is kept"
+            # the damped problem unanswered: the undamped answer, said so (and why)
+            note = ("damping: the step's deadline passed before the damped problem was solved"
+                    if self._late(start) else
+                    "damping: no back-end answered the damped problem") + (
+                "; the undamped answer is kept")
             return dataclasses.replace(out, attempts=(*out.attempts, note)), problem, None
         return again, damped, damping
 
