@@ -11,7 +11,7 @@ the layers).
 
 An internal import inside a function is refused: it is how a cycle gets hidden. The one exception
 is the command line: ``uvms_qp/cli`` modules import the heavy layers (``model`` brings Pinocchio,
-``hqp`` brings qpsolvers and scipy.optimize, ``sim`` and ``bench`` bring both) inside their
+``hqp`` brings qpsolvers and scipy.optimize, ``sim``, ``sweep`` and ``bench`` bring both) inside their
 ``run`` functions, so that ``uvms-qp --help`` and the parsing of a wrong option do not load them.
 Measured on the 2-core machine (7 interleaved runs, medians): ``python -m uvms_qp.cli --help``
 takes 0.37 s lazily and 2.4 s when the sub-commands' imports are made at module level (``import
@@ -45,9 +45,10 @@ LAYERS: dict[str, int | None] = {
     "controller": 5,
     "schemes": 6,
     "sim": 7,
-    "bench": 8,
-    "cli": 9,
-    "__main__": 10,
+    "sweep": 8,
+    "bench": 9,
+    "cli": 10,
+    "__main__": 11,
     "testing": None, "scenarios": None,
 }
 
@@ -62,7 +63,7 @@ KNOWS_ONLY: dict[str, frozenset[str]] = {
 
 #: Function-local internal imports allowed: importing package -> packages it may import lazily.
 LAZY_ALLOWED: dict[str, frozenset[str]] = {
-    "cli": frozenset({"model", "hqp", "sim", "bench"}),
+    "cli": frozenset({"model", "hqp", "sim", "sweep", "bench"}),
 }
 
 ROOT_UNIT = "<package>"  # uvms_qp/__init__.py: errors and ``__version__``, the rest lazily

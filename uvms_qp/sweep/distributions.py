@@ -29,7 +29,7 @@ from ..sim.config import Table, check_number, describe, join
 DISTRIBUTION_KEYS = ("uniform", "normal", "within", "choice")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Distribution:
     """A law of one scalar value (base class; :meth:`sample` draws one value).
 
@@ -58,7 +58,7 @@ class Distribution:
         raise NotImplementedError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Fixed(Distribution):
     """The same value in every run."""
 
@@ -79,7 +79,7 @@ class Fixed(Distribution):
         return f"{self.value:g}" if isinstance(self.value, float | int) else str(self.value)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Uniform(Distribution):
     """Uniform on ``[low, high]``."""
 
@@ -106,7 +106,7 @@ class Uniform(Distribution):
         return f"U({self.low:g}, {self.high:g})"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Normal(Distribution):
     """Gaussian of ``mean`` and ``std``, optionally truncated to ``[low, high]``."""
 
@@ -145,7 +145,7 @@ class Normal(Distribution):
         return text
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Choice(Distribution):
     """One of ``options``, equally likely."""
 
@@ -192,10 +192,10 @@ def read_distribution(value: Any, path: str, *, strings: bool = False) -> Distri
             or an empty choice; at the path of the culprit.
     """
     if strings and isinstance(value, str):
-        return Fixed(value)
+        return Fixed(value=value)
     if not isinstance(value, dict):
         check_number(value, path)
-        return Fixed(float(value))
+        return Fixed(value=float(value))
     table = Table(value, path, DISTRIBUTION_KEYS)
     laws = [key for key in ("uniform", "normal", "choice") if key in value]
     if len(laws) != 1:

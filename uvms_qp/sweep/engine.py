@@ -101,10 +101,14 @@ class Journal:
         elif self.path.exists():
             raise ConfigError(f"{str(out)!r} holds a {RUNS_FILE} without {SWEEP_FILE}; give "
                               "another folder", "--out")
-        out.mkdir(parents=True, exist_ok=True)
-        data = {**sweep_identity(spec), "provenance": provenance()}
-        identity.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+        self.identity = {**sweep_identity(spec), "provenance": provenance()}
         self.records = self._read()
+
+    def start(self) -> None:
+        """Write ``sweep.json`` (the folder now holds this sweep's records)."""
+        self.out.mkdir(parents=True, exist_ok=True)
+        (self.out / SWEEP_FILE).write_text(json.dumps(self.identity, indent=1) + "\n",
+                                           encoding="utf-8")
 
     def _read(self) -> dict[int, dict[str, Any]]:
         if not self.path.exists():
@@ -171,6 +175,12 @@ def run_sweep(
     own = pool is None
     pool = pool or Pool(workers, scheduler)
     outcome.pool = pool.describe()
+    try:
+        journal.start()
+    except OSError:
+        if own:
+            pool.close()
+        raise
 
     def record(result: dict[str, Any]) -> None:
         nonlocal failures

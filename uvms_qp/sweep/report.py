@@ -6,8 +6,8 @@ Written into the sweep's output folder next to ``runs.jsonl``:
   ``success``, ``failed``, ``error``, ``attempts``, each drawn parameter (a vector one as
   ``name[i]``), each metric, ``status_counts.*``, ``stage_counts.*``, ``timing.*``), read by
   ``pandas.read_csv`` as it is;
-- ``summary.json``: the success rate with its 95 % Wilson score interval, the runs per status and
-  per missed criterion, the percentiles of every numeric metric and, per varied parameter, the
+- ``summary.json``: the success rate with its 95 % Wilson score interval, the runs per status,
+  each criterion with the number of runs that missed it, the percentiles of every numeric metric and, per varied parameter, the
   success rate in each of its bins;
 - ``metrics.png``: histograms of the criteria's metrics (and a few headline ones), successes and
   failures stacked, each criterion's bound drawn;
@@ -132,18 +132,18 @@ def summarise(spec: SweepSpec, records: Sequence[dict[str, Any]]) -> dict[str, A
     runs = len(records)
     successes = sum(1 for r in records if r["success"])
     statuses: dict[str, int] = {}
-    missed: dict[str, int] = {c.describe(): 0 for c in spec.criteria}
     for r in records:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
-        for text in r["failed"]:
-            missed[text] = missed.get(text, 0) + 1
+    criteria = [{"criterion": c.describe(), "metric": c.metric, "min": c.low, "max": c.high,
+                 "missed": sum(1 for r in records if c.describe() in r["failed"])}
+                for c in spec.criteria]
     return {
         "sweep": spec.name, "scenario": spec.scenario, "plant": spec.plant, "seed": spec.seed,
         "runs": spec.runs, "recorded": runs, "successes": successes,
         "success_rate": successes / runs if runs else None,
         "success_interval": list(wilson_interval(successes, runs)) if runs else None,
         "confidence": CONFIDENCE,
-        "statuses": statuses, "criteria_missed": missed,
+        "statuses": statuses, "criteria": criteria,
         "metrics": metric_summary(records),
         "parameters": {v.name: {"law": v.dist.describe(), "unit": v.unit,
                                 "bins": parameter_bins(v, records)} for v in spec.varied},
