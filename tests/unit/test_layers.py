@@ -11,9 +11,9 @@ the layers).
 
 An internal import inside a function is refused: it is how a cycle gets hidden. The one exception
 is the command line: ``uvms_qp/cli`` modules import the heavy layers (``model`` brings Pinocchio,
-``hqp`` brings qpsolvers and scipy.optimize, ``sim``, ``sweep`` and ``bench`` bring both) inside their
-``run`` functions, so that ``uvms-qp --help`` and the parsing of a wrong option do not load them.
-Measured on the 2-core machine (7 interleaved runs, medians): ``python -m uvms_qp.cli --help``
+``hqp`` brings qpsolvers and scipy.optimize, ``sim``, ``sweep`` and ``bench`` bring both) inside
+their ``run`` functions, so that ``uvms-qp --help`` and the parsing of a wrong option do not load
+them. Measured on the 2-core machine (7 interleaved runs, medians): ``python -m uvms_qp.cli --help``
 takes 0.37 s lazily and 2.4 s when the sub-commands' imports are made at module level (``import
 uvms_qp.hqp.registry`` alone 1.5 s, ``uvms_qp.model`` alone 0.62 s; bare ``python`` 0.10 s).
 Lazy imports of optional third-party packages (plotly, pink, qpsolvers back-ends) are not internal

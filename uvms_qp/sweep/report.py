@@ -7,8 +7,8 @@ Written into the sweep's output folder next to ``runs.jsonl``:
   ``name[i]``), each metric, ``status_counts.*``, ``stage_counts.*``, ``timing.*``), read by
   ``pandas.read_csv`` as it is;
 - ``summary.json``: the success rate with its 95 % Wilson score interval, the runs per status,
-  each criterion with the number of runs that missed it, the percentiles of every numeric metric and, per varied parameter, the
-  success rate in each of its bins;
+  each criterion with the number of runs that missed it, the percentiles of every numeric
+  metric and, per varied parameter, the success rate in each of its bins;
 - ``metrics.png``: histograms of the criteria's metrics (and a few headline ones), successes and
   failures stacked, each criterion's bound drawn;
 - ``success_by_parameter.png``: per varied parameter, the success rate (with its Wilson
