@@ -57,7 +57,7 @@ class Pool:
     Args:
         workers: Local worker processes (default: the usable CPUs); ignored with ``scheduler``.
         scheduler: Address of a Dask scheduler (``tcp://host:port``), or None for local.
-        timeout: Seconds to wait for the scheduler [s].
+        timeout: Seconds to wait for the scheduler [s] (default :data:`CONNECT_TIMEOUT`).
 
     Raises:
         ConfigError: a bad ``workers``; with ``scheduler``, dask.distributed missing or the
@@ -65,11 +65,11 @@ class Pool:
     """
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None,
-                 timeout: float = CONNECT_TIMEOUT) -> None:
+                 timeout: float | None = None) -> None:
         self.scheduler = scheduler
         self.workers = usable_cpus() if workers is None else check_workers(workers)
         self._client: Any = None
-        self.executor: Executor = self._open(timeout)
+        self.executor: Executor = self._open(CONNECT_TIMEOUT if timeout is None else timeout)
 
     @property
     def kind(self) -> str:
