@@ -10,6 +10,8 @@ success is verified: finite, status optimal, level_infeasible, damped or blended
 1e-7; every failure is counted with its reason. A closed loop's first step is a warm-up (verified,
 not timed); a p95 / p99 from fewer than 20 / 100 timed samples is printed n/a.
 
+``--workers N`` runs the problems on N local processes, ``--scheduler ADDR`` on a Dask cluster
+(the executors of ``uvms-qp sweep``); each problem's solvers still run in turn in one worker.
 ``--json``/``--csv`` append to existing files and skip the (set, problem, solver) rows already
 there, so an interrupted run resumes. The terminal table has the main columns and fits 100
 characters; ``--markdown`` and ``--csv`` have every column. Progress goes to standard error: a bar
@@ -87,6 +89,12 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--csv", metavar="FILE", help="append rows to this CSV file (resumable)")
     parser.add_argument("--plot", metavar="FILE", help="write a PNG of the times")
     parser.add_argument("--markdown", metavar="FILE", help="write the table as markdown")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="run the problems on N local worker processes (default: one after "
+                             "the other in this process; side by side they share the machine)")
+    parser.add_argument("--scheduler", metavar="ADDR",
+                        help="run the problems on the Dask cluster of this scheduler "
+                             "(tcp://host:8786; pip install 'uvms-qp[cluster]')")
     parser.add_argument("--no-progress", action="store_true",
                         help="no progress bar (on a terminal) or progress lines (otherwise)")
     parser.set_defaults(func=run)
@@ -145,7 +153,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         outcome = run_benchmark(args.sets, args.solvers, repetitions=repetitions, seed=args.seed,
                                 config=config, json_path=args.json, csv_path=args.csv,
-                                progress=progress)
+                                progress=progress, workers=args.workers,
+                                scheduler=args.scheduler)
     finally:
         if bar is not None:
             bar.stop()

@@ -2,44 +2,10 @@
 
 from __future__ import annotations
 
-import textwrap
-from pathlib import Path
-
 import pytest
 
+from tests.support.sweeps import write_sweep
 from uvms_qp.sweep import load_sweep
-
-TINY = """
-scenario = "bluerov2_demo"
-runs = {runs}
-seed = 11
-duration = 0.25
-
-[current]
-direction = {{ uniform = [-0.5, 0.5] }}
-drift = {{ uniform = [0.0, 0.5] }}
-speed = 0.2
-
-[sensors]
-position_noise = {{ uniform = [0.0, 0.01] }}
-delay = {{ choice = [0.0, 0.05] }}
-
-[initial]
-joints = {{ normal = [0.0, 0.02], within = [-0.05, 0.05] }}
-
-[payload]
-mass = {{ uniform = [0.0, 3.0] }}
-
-[success]
-ee_error_max = {{ max = 0.01 }}
-"level_met_share.0" = {{ min = 0.99 }}
-"""
-
-
-def write_sweep(folder: Path, runs: int = 6, text: str = TINY, name: str = "tiny.toml") -> Path:
-    path = folder / name
-    path.write_text(textwrap.dedent(text.format(runs=runs)))
-    return path
 
 
 @pytest.fixture

@@ -25,9 +25,8 @@ def comparable(records):
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     """An uninterrupted 6-run sweep on two local workers: its spec and records."""
+    from tests.support.sweeps import write_sweep
     from uvms_qp.sweep import load_sweep
-
-    from .conftest import write_sweep
 
     folder = tmp_path_factory.mktemp("reference")
     spec = load_sweep(write_sweep(folder))

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import pytest
 
+from tests.support.sweeps import TINY, write_sweep
 from uvms_qp.errors import ConfigError
 from uvms_qp.sweep import bundled_sweeps, load_sweep
 from uvms_qp.sweep.distributions import Choice, Normal, Uniform
-
-from .conftest import TINY, write_sweep
 
 
 def _error(tmp_path, old: str, new: str) -> ConfigError:

@@ -1,0 +1,63 @@
+"""``uvms-qp sweep``: a sweep end to end, its resume and replay, one-line errors with status 2."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from tests.support.sweeps import TINY, write_sweep
+from uvms_qp.cli import main
+from uvms_qp.sweep.sampling import run_seed
+
+
+def test_a_sweep_runs_resumes_and_replays(tmp_path, capsys):
+    path = write_sweep(tmp_path, runs=3)
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    assert main(["sweep", str(path), "--out", str(out), "--runs", "4", "--workers", "1",
+                 "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    assert "4 runs (1 new, 3 resumed, 0 retried) on 1 local worker" in printed
+    assert "95 % Wilson interval" in printed
+    with (out / "runs.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [int(r["index"]) for r in rows] == [0, 1, 2, 3]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["recorded"] == 4
+    for name in ("sweep.json", "runs.jsonl", "metrics.png", "success_by_parameter.png"):
+        assert (out / name).is_file(), name
+    seed = int(rows[2]["seed"])
+    assert seed == run_seed(11, 2)
+    replay = tmp_path / "replay"
+    assert main(["sweep", str(path), "--out", str(replay), "--replay", str(seed),
+                 "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    assert f"run of seed {seed}" in printed and "current.direction" in printed
+    metrics = json.loads((replay / "results.json").read_text())["metrics"]
+    assert metrics["ee_error_max"] == float(rows[2]["ee_error_max"])
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--runs", "0"], "uvms-qp sweep: error: --runs: expected a number of runs in [1, 1000000], "
+                      "got 0"),
+    (["--workers", "0"], "uvms-qp sweep: error: --workers: expected a positive integer, got 0"),
+    (["--workers", "2", "--scheduler", "tcp://127.0.0.1:9"],
+     "uvms-qp sweep: error: --workers: give --workers or --scheduler, not both"),
+])
+def test_bad_options_exit_2_with_one_line(tmp_path, capsys, args, message):
+    path = write_sweep(tmp_path)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out"), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(message) and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_bad_sweep_file_exits_2_with_one_line_before_any_run(tmp_path, capsys):
+    path = write_sweep(tmp_path, text=TINY.replace("speed = 0.2", "speed = -0.2"))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err == ("uvms-qp sweep: error: current.speed: a current speed [m/s] must be >= 0, "
+                   "but the spread -0.2 reaches -0.2\n")
+    assert not (tmp_path / "out").exists()
