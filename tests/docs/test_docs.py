@@ -7,9 +7,9 @@ the tree):
 - ``python`` blocks run in one namespace per page (a later block may use an earlier one's names);
 - ``bash`` blocks run in ``bash -eu`` with ``uvms-qp`` and ``python`` meaning this checkout's
   command line and interpreter; they must exit 0 without a traceback;
-- ``toml`` blocks are scenarios (loaded and run for a few steps) or model files (loaded and
-  built); a block whose first line is a comment naming a file (``# my_rov.toml``) is also written
-  to that file for the blocks after it.
+- ``toml`` blocks are scenarios (loaded and run for a few steps), sweep files (loaded and
+  checked) or model files (loaded and built); a block whose first line is a comment naming a
+  file (``# my_rov.toml``) is also written to that file for the blocks after it.
 
 A block is skipped only when the line before its fence is ``<!-- fragment -->`` (a piece of a
 larger whole, e.g. an install command or a table to paste into another file); a block in another
@@ -33,6 +33,7 @@ from uvms_qp.model import load_model, model_names, unregister_model
 from uvms_qp.sim import simulate
 from uvms_qp.sim.model_file import register_model_file
 from uvms_qp.sim.scenario import load_scenario, scenario_from_dict
+from uvms_qp.sweep import load_sweep, sweep_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
@@ -119,11 +120,14 @@ def _run_toml(block: Block, cwd: Path) -> None:
                     scenario_from_dict(data, source=block.page))  # paths from the page's folder
         result = simulate(scenario, duration=min(scenario.duration, 3 * scenario.dt))
         assert result.metrics()["nan_steps"] == 0, block.where
+    elif "scenario" in data and "runs" in data:  # a sweep file: checked as `uvms-qp sweep` does
+        spec = load_sweep(path) if path else sweep_from_dict(data, source=block.page)
+        assert spec.runs >= 1, block.where
     elif ("urdf" in data or "dh" in data) and path is not None:
         assert load_model(register_model_file(path)).nv > 0   # what --model-path does
     else:
-        pytest.fail(f"{block.where}: a TOML block is a scenario or a model file named on its "
-                    f"first line; anything else is marked {FRAGMENT}")
+        pytest.fail(f"{block.where}: a TOML block is a scenario, a sweep file or a model file "
+                    f"named on its first line; anything else is marked {FRAGMENT}")
 
 
 def _anchors(page: Path) -> set[str]:

@@ -1,0 +1,109 @@
+"""Throughput of a sweep on local workers, and what the engine costs per run.
+
+Two figures on the same sweep (the bundled ``bluerov2_demo_sweep`` by default, ``--runs`` runs):
+
+1. *Scaling*: runs per minute on 1 and on 2 local worker processes (``run_sweep(workers=N)``,
+   each into a fresh folder, the pool's start-up included), repeated ``--repeats`` times
+   interleaved (1, 2, 1, 2, ...) so that a change of machine load hits both alike; medians and
+   their ratio (goal on a 2-core machine: >= 1.8).
+2. *Engine overhead*: the same runs as a plain loop in this process (draw, build, simulate, flat
+   metrics: :func:`uvms_qp.sweep.simulate_run` and ``run_outcome``; no pool, no file), against
+   the engine on one worker whose pool was opened and warmed before the clock starts (pickling
+   each task and its record, the futures, the appended line, the report's bookkeeping), per run
+   (goal: <= 5 %). The pool's one-time start (a forkserver importing the library, a worker) is
+   reported apart: it is paid once per sweep, not per run.
+
+Usage: ``python benchmarks/bench_sweep.py [--sweep NAME|FILE] [--runs N] [--repeats K]``
+``[--json FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from uvms_qp.sweep import Pool, load_sweep, run_seed, run_sweep, simulate_run
+from uvms_qp.sweep.outcome import run_outcome
+
+
+def _sweep_time(spec, workers: int) -> float:
+    with tempfile.TemporaryDirectory() as folder:
+        started = time.perf_counter()
+        run_sweep(spec, Path(folder) / "out", workers=workers)
+        return time.perf_counter() - started
+
+
+def _loop_time(spec) -> float:
+    started = time.perf_counter()
+    for index in range(spec.runs):
+        _, result = simulate_run(spec, run_seed(spec.seed, index))
+        run_outcome(result)
+    return time.perf_counter() - started
+
+
+def _engine_time(spec, pool: Pool) -> float:
+    with tempfile.TemporaryDirectory() as folder:
+        started = time.perf_counter()
+        run_sweep(spec, Path(folder) / "out", pool=pool)
+        return time.perf_counter() - started
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sweep", default="bluerov2_demo_sweep")
+    parser.add_argument("--runs", type=int, default=24)
+    parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--json", help="write the figures to this file")
+    args = parser.parse_args()
+    spec = load_sweep(args.sweep).with_runs(args.runs)
+    load = os.getloadavg()
+
+    times: dict[int, list[float]] = {1: [], 2: []}
+    for _ in range(args.repeats):
+        for workers in (1, 2):
+            times[workers].append(_sweep_time(spec, workers))
+    rate = {w: 60.0 * spec.runs / statistics.median(t) for w, t in times.items()}
+
+    started = time.perf_counter()
+    pool = Pool(workers=1)
+    _engine_time(spec.with_runs(1), pool)  # starts the worker: not timed below
+    first = time.perf_counter() - started
+    loop, engine = [], []
+    for _ in range(args.repeats):
+        loop.append(_loop_time(spec))
+        engine.append(_engine_time(spec, pool))
+    pool.close()
+    per_run_loop = statistics.median(loop) / spec.runs
+    per_run_engine = statistics.median(engine) / spec.runs
+    overhead = per_run_engine / per_run_loop - 1.0
+
+    figures = {
+        "sweep": spec.name, "runs": spec.runs, "repeats": args.repeats,
+        "loadavg_start": list(load), "loadavg_end": list(os.getloadavg()),
+        "seconds_1_worker": times[1], "seconds_2_workers": times[2],
+        "runs_per_minute_1": rate[1], "runs_per_minute_2": rate[2],
+        "speed_up_2_over_1": rate[2] / rate[1],
+        "plain_loop_s_per_run": per_run_loop, "engine_s_per_run": per_run_engine,
+        "engine_overhead": overhead, "first_run_on_a_new_pool_s": first,
+        "pool_start_s": first - per_run_loop,
+    }
+    print(f"{spec.name}: {spec.runs} runs, {args.repeats} repeats, load "
+          f"{' '.join(f'{v:.2f}' for v in load)}")
+    print(f"  1 worker : {rate[1]:7.1f} runs/min (median of {times[1]})")
+    print(f"  2 workers: {rate[2]:7.1f} runs/min (median of {times[2]})")
+    print(f"  speed-up : {rate[2] / rate[1]:.2f}x (goal >= 1.8)")
+    print(f"  plain loop {1e3 * per_run_loop:.1f} ms/run, engine on a warm worker "
+          f"{1e3 * per_run_engine:.1f} ms/run: overhead {100 * overhead:+.1f} % (goal <= 5 %)")
+    print(f"  a new pool's first run took {first:.2f} s: about {first - per_run_loop:.2f} s of "
+          "start-up (forkserver + worker), once per sweep")
+    if args.json:
+        Path(args.json).write_text(json.dumps(figures, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
