@@ -227,7 +227,7 @@ def _histograms(spec: SweepSpec, records: Sequence[dict[str, Any]]) -> Any:
 def _parameter_panels(spec: SweepSpec, records: Sequence[dict[str, Any]],
                       summary: dict[str, Any]) -> Any:
     plt = pyplot()
-    varied = list(spec.varied) or [None]
+    varied: list[Variable | None] = [*spec.varied] or [None]
     cols = min(3, len(varied))
     rows = math.ceil(len(varied) / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
