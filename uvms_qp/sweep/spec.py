@@ -45,11 +45,13 @@ PLANTS = ("kinematic", "dynamic")
 PLANT_PARAMETERS: dict[str, str] = {
     "vehicle.mass": "the vehicle's mass [kg]",
     "vehicle.volume": "the vehicle's displaced volume [m^3]",
+    "vehicle.inertia": "the vehicle's rotational inertia",
     "vehicle.added_mass": "the vehicle's added-mass matrix",
     "vehicle.linear_damping": "the vehicle's linear damping",
     "vehicle.quadratic_damping": "the vehicle's quadratic damping",
     "links.mass": "the arm links' masses [kg]",
     "links.volume": "the arm links' displaced volumes [m^3]",
+    "links.inertia": "the arm links' rotational inertias",
     "links.added_mass": "the arm links' added-mass matrices",
     "links.linear_damping": "the arm links' linear damping",
     "links.quadratic_damping": "the arm links' quadratic damping",
@@ -419,8 +421,6 @@ def sweep_from_dict(data: dict[str, Any], *, source: Path | None = None,
     base = source.parent if source is not None else Path.cwd()
     scenario_name, path, scenario_data, scenario = _base_scenario(top, base)
     plant = str(top.take_str("plant", "kinematic", choices=PLANTS))
-    if plant == "dynamic" and not hasattr(scenario, "plant"):
-        raise ConfigError("this installation has no dynamic plant", top.at("plant"))
     runs = _check_runs(top.raw("runs", required=True), top.at("runs"))
     seed = top.raw("seed", required=True)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
@@ -437,6 +437,8 @@ def sweep_from_dict(data: dict[str, Any], *, source: Path | None = None,
     ]
     success = top.take_table("success")
     top.finish()
+    if plant == "dynamic" and not hasattr(scenario, "plant"):
+        raise ConfigError("this installation has no dynamic plant", top.at("plant"))
     pilot = dataclasses.replace(scenario, phases=tuple(
         Phase(p.name, 0.0, 2.0 * scenario.dt) for p in scenario.phases))
     criteria = _read_success(success, metric_names(pilot))

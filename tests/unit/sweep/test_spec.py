@@ -60,6 +60,21 @@ def test_a_bad_sweep_file_names_its_culprit(tmp_path, old, new, path, words):
     assert words in str(error)
 
 
+@pytest.mark.parametrize(("key", "law", "words"), [
+    ("vehicle.mass", "{{ uniform = [-1.2, 0.0] }}",
+     "the vehicle's mass [kg] is scaled by 1 + x, which must stay positive, but the spread "
+     "U(-1.2, 0) reaches a factor 1 + (-1.2) = -0.2"),
+    ("links.volume", "{{ normal = [0.0, 0.3] }}", "is unbounded (add within = [low, high])"),
+    ("vehicle.volume", "-1.0", "reaches a factor 1 + (-1) = 0"),
+    ("vehicle.masss", "0.1", "unknown plant parameter 'vehicle.masss'"),
+])
+def test_a_plant_parameter_spread_keeps_every_magnitude_positive(tmp_path, key, law, words):
+    error = _error(tmp_path, "[current]",
+                   f'plant = "dynamic"\n[plant_parameters]\n"{key}" = {law}\n[current]')
+    assert error.path == f"plant_parameters.{key}"
+    assert words in str(error)
+
+
 def test_the_base_scenario_errors_carry_their_own_path(tmp_path):
     scenario = tmp_path / "base.toml"
     scenario.write_text('model = "bluerov2_heavy_alpha5"\ndt = 0.05\nduration = 1.0\n'
