@@ -24,6 +24,7 @@ process's, and a Dask worker may run several tasks in threads.
 from __future__ import annotations
 
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,8 +98,11 @@ def run_one(task: RunTask) -> dict[str, Any]:
     try:
         record["parameters"] = draw(task.spec.variables, task.seed)
         with _LOCK:
+            started = time.process_time()
             _, result = simulate_run(task.spec, task.seed, record["parameters"])
+            cpu = time.process_time() - started
         record.update(run_outcome(result))
+        record["timing"]["cpu_time_s"] = cpu
         stopped = getattr(result, "stopped", None)
         record["stopped"] = stopped
         record["status"] = "ok" if stopped is None else "stopped"
