@@ -62,7 +62,7 @@ def _engine(spec, pool: Pool) -> tuple[float, float]:
         started, cpu = time.perf_counter(), time.process_time()
         outcome = run_sweep(spec, Path(folder) / "out", pool=pool)
         wall, mine = time.perf_counter() - started, time.process_time() - cpu
-    return wall, mine + sum(r["timing"]["cpu_time_s"] for r in outcome.records)
+    return wall, mine + sum(r["timing"].get("cpu_time_s", 0.0) for r in outcome.records)
 
 
 def main() -> None:
