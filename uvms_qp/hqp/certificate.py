@@ -83,11 +83,11 @@ from time import perf_counter
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import nnls
 
 from .._validation import FloatArray
 from .backends.daqp_binding import DaqpBinding, open_daqp
 from .kkt import active_set
+from .linalg import nnls
 from .problem import Problem
 
 #: Verdicts of one level.
@@ -608,7 +608,7 @@ def _nnls(A: FloatArray, g: FloatArray, act: np.ndarray, lam: FloatArray) -> Non
     """Signed multipliers of ``min |g + A' lambda|`` on the active sides, written into ``lam``.
 
     ``lam`` has one entry per leading row of ``A`` that may carry one (the rows above the
-    level); one :func:`scipy.optimize.nnls` on unit columns (``+a`` at an upper side, ``-a`` at
+    level); one :func:`uvms_qp.hqp.linalg.nnls` on unit columns (``+a`` at an upper side, ``-a`` at
     a lower one).
     """
     start = lam.shape[0]
@@ -622,7 +622,7 @@ def _nnls(A: FloatArray, g: FloatArray, act: np.ndarray, lam: FloatArray) -> Non
     live = norms > 0.0
     rows, norms = rows[live], norms[live]
     sign = np.where(np.arange(live.size)[live] < up.size, 1.0, -1.0)
-    coef, _ = nnls((A[rows] * (sign / norms)[:, None]).T, -g, maxiter=50 * max(rows.size, 10))
+    coef, _ = nnls((A[rows] * (sign / norms)[:, None]).T, -g, 50 * max(rows.size, 10))
     np.add.at(lam, rows, sign * coef / norms)
 
 

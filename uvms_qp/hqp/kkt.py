@@ -24,9 +24,9 @@ from dataclasses import dataclass
 from time import perf_counter
 
 import numpy as np
-from scipy.optimize import nnls
 
 from .._validation import FloatArray
+from .linalg import nnls
 
 #: relative feasibility tolerance of a certified point, ``G z - h <= FEAS_TOL (1 + |h|)``
 FEAS_TOL = 1e-10
@@ -77,7 +77,7 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     """Check the KKT conditions of the QP at ``z``; return the certificate or None.
 
     Multipliers are searched only on constraints tight at ``z`` (complementary slackness) and
-    kept non-negative (dual feasibility) by :func:`scipy.optimize.nnls`; ``z`` must be feasible.
+    kept non-negative (dual feasibility) by :func:`uvms_qp.hqp.linalg.nnls`; ``z`` must be feasible.
     """
     n = z.size
     if not feasible(G, h, lb, ub, z):
@@ -98,7 +98,7 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     blocks.append(-eye[tight_l])
     C = np.vstack(blocks)
     if C.shape[0]:
-        nu, _ = nnls(C.T, -g, maxiter=50 * max(C.shape))
+        nu, _ = nnls(C.T, -g, 50 * max(C.shape))
         r = g + C.T @ nu
         reach = float(np.abs(C.T @ nu).max())
     else:
