@@ -46,7 +46,7 @@ def test_zero_row_above_an_unmet_level_gets_a_typed_answer(solver):
     assert out.returncode == 0, out.stderr[-2000:]
     verdict, answer = out.stdout.splitlines()[:2]
     assert verdict == "unproven"  # the origin is not the optimum of level 1, and not certified
-    status, ok, x = answer.split(" ", 2)
+    _, ok, x = answer.split(" ", 2)
     if solver != "nullspace":
         assert ok == "True", answer  # level 0 cannot be met; x0 = -1 is proven optimal
         assert json.loads(x)[0] == pytest.approx(-1.0, abs=1e-6)
