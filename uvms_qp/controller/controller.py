@@ -69,8 +69,10 @@ class Controller:
         strict: Raise :class:`~uvms_qp.errors.NoSolutionFound` when no back-end returns a
             verified solution, instead of degrading (relaxed levels, decayed previous command,
             zero; see :mod:`uvms_qp.safety` and ``docs/reliability.md``).
-        deadline: Wall-time budget of one step [s] (None: none); back-ends get matching time or
-            iteration limits and the fallback ladder skips its solver stages once it has passed.
+        deadline: Wall-time budget of one step [s]; None (the default): the control period
+            ``dt``; ``math.inf``: none. Every part of the step takes its time from it (the
+            back-end, the certificate, the repair, the damping screen), and the fallback ladder
+            skips its solver stages once it has passed (``docs/reliability.md``).
         damping: Damping threshold of every level that sets none (``Level(damping=...)``),
             >= 0: a level's directions whose singular value, in the freedom the higher levels
             leave, is below it get bounded rates (:mod:`uvms_qp.hqp.damping`); away from
@@ -103,6 +105,8 @@ class Controller:
         self.damping = as_scalar(damping, "damping", nonnegative=True)
         self.assembler = StackAssembler(model, stack, self.dt, self.metric, self.damping)
         self.stack = self.assembler.stack
+        if deadline is None:
+            deadline = self.dt
         self._scheme = SCHEMES[scheme](self.assembler, solver=solver, options=options,
                                        deadline=deadline, strict=self.strict,
                                        priority_ratio=self.priority_ratio)

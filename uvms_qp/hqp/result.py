@@ -48,7 +48,8 @@ class Status(StrEnum):
 #: How a summary reads the certificate's verdict on a level.
 _VERDICTS = {"met": "met", "certified": "NOT met, proven optimal",
              "ill_posed": "NOT met, ill-posed (not proven)", "improvable": "NOT met, improvable",
-             "unproven": "NOT met, not proven optimal"}
+             "unproven": "NOT met, not proven optimal",
+             "late": "NOT met, not proven optimal (deadline)"}
 
 #: Statuses that claim the lexicographic optimum.
 OK_STATUSES = (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)

@@ -236,7 +236,7 @@ class DaqpBackend:
         self.rho_soft = float(merged.get("rho_soft", 1e-8))
         self.open_binding: Callable[[], DaqpBinding] = open_daqp
         self._ladder = (self.rho_soft, *[r for r in self.rho_ladder if r != self.rho_soft])
-        self.time_cap = math.inf  # DAQP's own ``time_limit`` setting bounds its solves
+        self.end = math.inf  # the solve's end: DAQP's own ``time_limit`` is cut to it
         self.clock: Callable[[], float] = perf_counter
         self._setups: dict[Problem, _Setup] = {}
         self._last: tuple[Problem | None, _Setup | None] = (None, None)
@@ -340,6 +340,9 @@ class DaqpBackend:
         raw: Any = None
         for i, rho in enumerate(self._ladder):
             if i:
+                if self.clock() > self.end:
+                    flag = -7  # the solve's end passed: no further rho_soft
+                    break
                 setup.cold(rho)
             flag = binding.solve()
             raw = binding.x
