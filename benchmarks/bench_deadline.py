@@ -103,7 +103,6 @@ def random_solves(count: int, deadline: float) -> tuple[np.ndarray, Counter[str]
                                           lower, upper))
     for fam in MATRIX_FAMILIES:
         for p in family(fam, max(1, count // 20), seed=5):
-            A, lo, hi, n, mh, sizes, w = p.stacked()
             problems.append(normalize_problem(p.levels_rows(), p.lower, p.upper,
                                               hard=p.hard_rows()))
     safe = SafeSolver("daqp", deadline=deadline)

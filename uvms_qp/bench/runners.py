@@ -67,7 +67,7 @@ WEIGHTED_BACKEND = "cascade:daqp"
 
 #: Statuses of a verified answer: the lexicographic optimum, or the controller's damped or blended
 #: one (the optimum of the stack with damping rows near a singularity; tasks ramping).
-OK_STATUSES = ("optimal", "level_infeasible", "damped", "blended")
+OK_STATUSES = ("optimal", "damped", "blended")
 
 
 # ------------------------------------------------------------------------------- verification

@@ -83,7 +83,7 @@ DECAYED = "decayed_previous"
 ZERO = "zero"
 HOLD_ZERO = "hold_zero"
 
-_OPTIMAL, _LEVEL_INFEASIBLE, _UNPROVEN = Status.OPTIMAL, Status.LEVEL_INFEASIBLE, Status.UNPROVEN
+_OPTIMAL, _UNPROVEN = Status.OPTIMAL, Status.UNPROVEN
 _VALUES = {status: status.value for status in Status}  # without the enum's property per step
 
 #: Every stage that can produce the command, in ladder order.
@@ -433,7 +433,7 @@ class SafeSolver:
                                            self._clock() - began, str(exc)))
             return None
         status = result.status
-        if status is _OPTIMAL or status is _LEVEL_INFEASIBLE:
+        if status is _OPTIMAL:
             step.record.append(StageRecord(stage, _VALUES[status], self._clock() - began,
                                            used=True))
             return result

@@ -34,7 +34,7 @@ class Answer:
     Attributes:
         x: Solution, or None on failure (never trusted: measured afterwards).
         status: The back-end's verdict (``optimal`` means "claims success": the measurement
-            decides between optimal and level_infeasible).
+            and the certificate decide).
         message: Detail for the user.
         info: Back-end extras (exit flags, DAQP's own timing...).
         measured: :func:`~uvms_qp.hqp.measure.measure` of ``x``, when the back-end measured it
