@@ -87,3 +87,15 @@ class OneBlasThread:
 
 #: The one limiter of the solve path (entered by every solve and every control step).
 one_blas_thread = OneBlasThread()
+
+
+def warm_up() -> None:
+    """Pay the process's one-time costs of the solve path now, not in a first control step.
+
+    Finding the BLAS libraries (about 40 ms) and numpy's first ``unique`` (its lazily loaded
+    module, about 10 ms) would otherwise fall into the first step and eat its deadline; a safe
+    solver calls this when it is built. Idempotent.
+    """
+    if one_blas_thread._libs is None:
+        one_blas_thread._find()
+        np.unique(np.zeros(1))

@@ -68,7 +68,7 @@ from ..errors import InputError, NoSolutionFound
 from ..hqp import HierarchyResult, HierarchySolver, Problem, Status
 from ..hqp.damping import Damping
 from ..hqp.hard_set import hard_feasible
-from ..hqp.linalg import one_blas_thread
+from ..hqp.linalg import one_blas_thread, warm_up
 from ..hqp.measure import clip_to_box, evaluate, placeholder
 from ..hqp.registry import available_solvers, get_spec
 from .deadline import backend_limits
@@ -286,6 +286,7 @@ class SafeSolver:
         self.alternate: HierarchySolver | None = None if alternate is None else HierarchySolver(
             alternate, weights, backend_limits(alternate, self.deadline))
         self.clock = clock
+        warm_up()
         self.previous: FloatArray | None = None
         self.consecutive = 0
         self.stage_counts: Counter[str] = Counter()
