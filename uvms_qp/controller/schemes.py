@@ -132,7 +132,7 @@ class _StackScheme:
         if out.stage in DEGRADED_STAGES:  # e.g. an empty box, which no back-end can answer
             assembler.check_box(state)
         damping = out.damping
-        solved = problem if damping is None else self._damped_stack
+        solved = problem if damping is None or self._damped_stack is None else self._damped_stack
         status = out.result.status if damping is None else Status.DAMPED
         if ramping and out.solved:
             blend = self._blend(excluded, ramping, out, solved, start)

@@ -182,7 +182,8 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
         residuals = list(map(_SQRT, squares[1:]))
     else:
         residuals = [_INF if v != v else _SQRT(v) for v in squares[1:]]
-    status, infeasible, unmet = claim, None, ()
+    status, infeasible = claim, None
+    unmet: tuple[int, ...] = ()
     cert: Certificate | None = None
     if claim is _OPTIMAL:
         if hv > hard_tol and hv > hard_tol * problem.hard_scale:

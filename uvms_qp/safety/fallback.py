@@ -56,6 +56,7 @@ solver stages, ``backend_error`` (or ``hard_infeasible``) for the decayed, zero 
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections import Counter
@@ -405,7 +406,8 @@ class SafeSolver:
             stages.append((ALTERNATE, lambda: self._alternate(step)))
         stages.append(("unproven", lambda: self._kept(step)))
         if self.relax and not self.strict:
-            stages.extend((f"{RELAXED} to {keep} levels", lambda keep=keep: self._relax(step, keep))
+            stages.extend((f"{RELAXED} to {keep} levels",
+                           functools.partial(self._relax, step, keep))
                           for keep in range(len(problem.sizes) - 1, -1, -1))
         found = None
         for name, stage in stages:

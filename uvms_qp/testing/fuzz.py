@@ -35,6 +35,9 @@ from typing import Any
 import numpy as np
 
 from .._validation import FloatArray
+from ..hqp import HierarchySolver, Problem, available_solvers
+from ..hqp.certificate import Certifier, repair
+from ..hqp.damping import level_damping
 
 #: What a case runs, in order.
 PARTS = ("solve", "certify", "repair", "damping")
@@ -101,8 +104,6 @@ def draw(seed: int, solvers: tuple[str, ...] | None = None) -> Case:
     cases).
     """
     if solvers is None:
-        from ..hqp import available_solvers
-
         others = tuple(s for s in available_solvers() if s != "daqp")
         solvers = ("daqp",) * len(others) + others
     rng = np.random.default_rng(seed)
@@ -139,17 +140,15 @@ def draw(seed: int, solvers: tuple[str, ...] | None = None) -> Case:
             rows.append(a)
             sides.append(_sides(rng, a))
     A = np.vstack([np.eye(n), *[h[None] for h in hard], *[r[None] for r in rows]])
-    lo = np.concatenate([lower, [s[0] for s in hard_sides], [s[0] for s in sides]])
-    hi = np.concatenate([upper, [s[1] for s in hard_sides], [s[1] for s in sides]])
+    lows = np.concatenate([lower, [v[0] for v in hard_sides], [v[0] for v in sides]])
+    highs = np.concatenate([upper, [v[1] for v in hard_sides], [v[1] for v in sides]])
     w = 10.0 ** rng.uniform(-3, 3, len(rows)) if rng.random() < 0.3 else np.ones(len(rows))
     x = np.clip(rng.standard_normal(n) * 10.0 ** rng.uniform(-3, 3), lower, upper)
-    return Case(seed, n, mh, tuple(sizes), A, lo, hi, w, x,
+    return Case(seed, n, mh, tuple(sizes), A, lows, highs, w, x,
                 str(solvers[int(rng.integers(len(solvers)))]))
 
 
-def _problem(case: Case) -> Any:
-    from ..hqp import Problem
-
+def _problem(case: Case) -> Problem:
     problem = Problem(case.n, case.mh, case.sizes)
     problem.A[...] = case.A
     problem.lo[...] = case.lo
@@ -164,17 +163,12 @@ def run_case(case: Case, solvers: dict[str, Any]) -> dict[str, str]:
     A part that raises is reported by exception type (a typed error is an answer; anything
     else is a finding, but not a crash).
     """
-    from ..hqp.certificate import Certifier, repair
-    from ..hqp.damping import level_damping
-
     problem = _problem(case)
     out: dict[str, str] = {}
     x = case.x
     try:
         solver = solvers.get(case.solver)
         if solver is None:
-            from ..hqp import HierarchySolver
-
             solver = solvers[case.solver] = HierarchySolver(case.solver)
         result = solver.solve_problem(problem)
         x = result.x if result.hard_violation == 0.0 else x
