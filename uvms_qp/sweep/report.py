@@ -44,7 +44,8 @@ PERCENTILES = (5, 25, 50, 75, 95)
 PARAMETER_BINS = 6
 #: Metrics shown in ``metrics.png`` after the criteria's, when the runs report them.
 HEADLINE_METRICS = ("ee_error_max", "ee_error_final", "bound_violation_max",
-                    "vehicle_displacement_max", "joint_margin_min", "level_met_share.0")
+                    "vehicle_displacement_max", "joint_margin_min", "level_met_share.0",
+                    "pitch_max", "energy", "saturation_share_max")
 #: Most histograms in ``metrics.png``.
 MAX_HISTOGRAMS = 9
 
