@@ -28,6 +28,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from ..hqp.linalg import one_blas_thread
 from ..sim.runner import simulate
 from .measurement import MeasuredScheme
 from .outcome import run_outcome
@@ -76,6 +77,10 @@ def simulate_run(spec: SweepSpec, seed: int, parameters: dict[str, Any] | None =
                  ) -> tuple[dict[str, Any], Any]:
     """Draw, build and simulate the run of seed ``seed``: its parameters and its result.
 
+    The run's linear algebra uses one BLAS thread (:data:`~uvms_qp.hqp.linalg.one_blas_thread`):
+    its matrices are small, and the sweep's parallelism is its processes (a second BLAS thread
+    per worker would contend for the cores the other workers use).
+
     Args:
         spec: The sweep.
         seed: The run's seed.
@@ -89,7 +94,8 @@ def simulate_run(spec: SweepSpec, seed: int, parameters: dict[str, Any] | None =
     scheme: Any = scenario.make_controller(stack=stack)
     if setup.noise is not None:
         scheme = MeasuredScheme(scheme, scenario.model, setup.noise, scenario.dt)
-    return parameters, simulate(scenario, scheme, stack=stack)
+    with one_blas_thread:
+        return parameters, simulate(scenario, scheme, stack=stack)
 
 
 def run_one(task: RunTask) -> dict[str, Any]:
