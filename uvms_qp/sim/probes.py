@@ -134,6 +134,13 @@ class Probes:
             e = task.compute_error(state, t)
             self.task_errors[task.name][k] = float(np.sqrt(e @ e))
 
+    def truncate(self, count: int) -> None:
+        """Keep the first ``count`` states of every series (a run that ended early)."""
+        for name, value in list(vars(self).items()):
+            if isinstance(value, np.ndarray) and value.ndim and value.shape[0] > count:
+                setattr(self, name, value[:count])
+        self.task_errors = {name: series[:count] for name, series in self.task_errors.items()}
+
     def arrays(self) -> dict[str, Any]:
         """The recorded arrays by name (``yaw`` and the payload series only when defined)."""
         data: dict[str, Any] = {

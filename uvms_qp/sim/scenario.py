@@ -44,7 +44,11 @@ from ..tasks import TASK_TYPES
 from .config import Table, did_you_mean, instantiate, join, keyword_arguments, read_toml
 from .current import ConstantCurrent
 from .integrators import Integrator
+from .dynamic_plant import DynamicPlant
 from .model_file import MODEL_KEYS, model_from_table
+from .plant_config import PLANT_KEYS, SENSOR_KEYS, PlantSpec, read_plant, read_sensors
+from .plants import KinematicPlant, Plant
+from .sensors import MeasurementChannel, Sensors
 from .stack_tables import (
     Event,
     StackTables,
@@ -71,7 +75,7 @@ _TOP_KEYS = (
     "name", "description", "model", "dt", "duration", "solver", "strict", "deadline", "damping",
     "metric",
     "schemes", "scheme_options", "integrator", "initial", "current", "passive", "trajectories",
-    "constraints", "levels", "events", "tracking", "phases",
+    "constraints", "levels", "events", "tracking", "phases", "plant", "sensors",
 )
 
 __all__ = [
@@ -189,6 +193,8 @@ class Scenario:
     source: Path | None
     stack_source: Callable[[], Stack] = field(repr=False)
     damping: float | None = None
+    plant: PlantSpec = field(default_factory=PlantSpec)
+    sensors: Sensors | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "q0", _read_only(self.q0))
@@ -229,6 +235,33 @@ class Scenario:
             **({} if self.damping is None else {"damping": self.damping}),
         )
 
+    def make_plant(self, sensors: MeasurementChannel | None = None) -> Plant:
+        """A new plant for one run: :attr:`plant` ``kind`` decides kinematic or dynamic.
+
+        Args:
+            sensors: The run's measurement channel (the velocity the dynamic plant's loop
+                reads), or None for exact measurements.
+        """
+        if self.plant.kind == "kinematic":
+            return KinematicPlant(self.integrator, self.dt)
+        return DynamicPlant(self.model, self.plant, self.dt, self.current, sensors)
+
+    def with_plant(self, kind: str, path: str = "plant") -> Scenario:
+        """This scenario on another plant kind (``"kinematic"`` or ``"dynamic"``).
+
+        The dynamic plant takes the scenario's ``[plant]`` settings, or the defaults of the
+        model's parameter set when it has none.
+
+        Raises:
+            ConfigError: at ``path``: an unknown kind, or a model without dynamic data (the
+                message names what is missing).
+        """
+        try:
+            spec = self.plant.as_kind(kind, self.model)
+        except UvmsQpError as exc:
+            raise ConfigError(str(exc), path) from exc
+        return dataclasses.replace(self, plant=spec)
+
     def with_duration(self, duration: Any, path: str = "duration") -> Scenario:
         """This scenario with another simulated time [s] (same step cap).
 
@@ -262,6 +295,8 @@ class Scenario:
         damping: float | None = None,
         schemes: Sequence[str] = ("hqp",),
         scheme_options: Mapping[str, Mapping[str, Any]] | None = None,
+        plant: PlantSpec | None = None,
+        sensors: Sensors | None = None,
     ) -> Scenario:
         """Assemble a scenario in code (no file), validated as a file would be.
 
@@ -288,6 +323,9 @@ class Scenario:
             damping: Damping threshold of the controller's levels (None: the library's).
             schemes: Schemes ``compare`` runs (``"hqp"`` is the stack).
             scheme_options: Keyword arguments of listed closed-form schemes, by scheme name.
+            plant: What the run drives (:class:`~uvms_qp.sim.plant_config.PlantSpec`); default
+                the kinematic plant.
+            sensors: Noise and delay of what the controller measures; default exact.
 
         Raises:
             InputError: invalid dt/duration/q0/deadline, an event naming an unknown task
@@ -348,6 +386,8 @@ class Scenario:
             task_names=tuple(level.names for level in check.levels),
             source=None,
             stack_source=source,
+            plant=plant or PlantSpec(),
+            sensors=sensors,
         )
         check.check_period(scenario.dt)  # the events are then checked against the period
         scenario._check_objects(check)
@@ -680,6 +720,9 @@ def scenario_from_dict(
     events = read_events(top, duration, stack, resolver)
     tracking, reference = _tracking(top, stack, tables)
     phases = _read_phases(top, duration)
+    base = source.parent if source is not None else Path.cwd()
+    plant = read_plant(top.take_table("plant", keys=PLANT_KEYS), model, base)
+    sensors = read_sensors(top.take_table("sensors", keys=SENSOR_KEYS))
     top.finish()
     scenario = Scenario(
         name=scenario_name,
@@ -705,6 +748,8 @@ def scenario_from_dict(
         source=source,
         stack_source=tables,
         damping=damping,
+        plant=plant,
+        sensors=sensors,
     )
     check_periods(tables, stack, dt)
     scenario._check_objects(stack)
