@@ -43,8 +43,8 @@ from ..stack import Stack
 from ..tasks import TASK_TYPES
 from .config import Table, did_you_mean, instantiate, join, keyword_arguments, read_toml
 from .current import ConstantCurrent
-from .integrators import Integrator
 from .dynamic_plant import DynamicPlant
+from .integrators import Integrator
 from .model_file import MODEL_KEYS, model_from_table
 from .plant_config import PLANT_KEYS, SENSOR_KEYS, PlantSpec, read_plant, read_sensors
 from .plants import KinematicPlant, Plant
