@@ -119,18 +119,3 @@ class SolverError(UvmsQpError):
 
 class NoSolutionFound(SolverError):
     """No verified solution could be produced; ``result`` keeps the failed problem."""
-
-
-class SimulationDiverged(UvmsQpError):
-    """A simulated plant left the range where its equations hold (non-finite or runaway state).
-
-    Attributes:
-        time: Simulated time of the failure [s].
-        state: What the plant held when it failed (a mapping of named arrays), for the report.
-    """
-
-    def __init__(self, message: str, time: float = float("nan"),
-                 state: dict[str, Any] | None = None) -> None:
-        self.time = time
-        self.state = dict(state or {})
-        super().__init__(message)

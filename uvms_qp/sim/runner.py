@@ -396,7 +396,7 @@ def simulate(
         try:
             plant.advance(zeta, t, rates)
         except SimulationDiverged as exc:
-            stopped = {"time": float(exc.time), "step": k, "error": str(exc)}
+            stopped = {"time": float(exc.t), "step": k, "error": str(exc)}
             n = k  # the failed step's command was never realised: keep the steps before it
             break
         bar.update(k + 1)
