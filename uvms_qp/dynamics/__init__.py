@@ -9,6 +9,7 @@ from .thrusters import (
     ThrusterDynamics,
     ThrusterLayout,
 )
+from .vehicle_loop import VelocityLoop, pole_placement_gains
 
 __all__ = [
     "Allocation",
@@ -18,4 +19,6 @@ __all__ = [
     "Thruster",
     "ThrusterDynamics",
     "ThrusterLayout",
+    "VelocityLoop",
+    "pole_placement_gains",
 ]
