@@ -621,7 +621,9 @@ class ThrustAllocator:
                                     self._lower, np.zeros(n, dtype=np.intc))
         if flag < 0:  # pragma: no cover - H is positive definite by construction
             raise AllocationError(f"DAQP could not set the allocation up (exit flag {flag})")
-        self._saturation_tol = 1e-9 * np.maximum(self._upper, -self._lower)
+        tol = 1e-9 * np.maximum(self._upper, -self._lower)  # "at a limit" [N]
+        self._upper_reached = self._upper - tol
+        self._lower_reached = self._lower + tol
 
     def allocate(self, wrench: Any) -> Allocation:
         """Thruster forces for the demanded body ``wrench`` [N, N m] (6,), FRD body frame.
@@ -634,15 +636,15 @@ class ThrustAllocator:
         tau = as_vector(wrench, "wrench", 6)
         model = self._model
         model.update(f=self._minus_BtW.dot(tau))
-        x, _, flag, _ = model.solve()
-        if flag < 0 or not np.isfinite(x).all():
+        x, _, flag, _ = model.solve()  # a new array every solve
+        if flag < 0 or not x.dot(x) < math.inf:  # NaN fails the comparison
             raise AllocationError(f"DAQP failed on the allocation of wrench {tau.tolist()} "
                                   f"(exit flag {flag})")
-        forces = np.clip(x, self._lower, self._upper)  # round-off at an active bound
-        produced = self.layout.matrix.dot(forces)
-        tol = self._saturation_tol
-        saturated = (forces >= self._upper - tol) | (forces <= self._lower + tol)
-        return Allocation(forces, tau.copy(), produced, tau - produced, saturated)
+        np.maximum(x, self._lower, out=x)  # round-off at an active bound
+        np.minimum(x, self._upper, out=x)
+        produced = self.layout.matrix.dot(x)
+        saturated = (x >= self._upper_reached) | (x <= self._lower_reached)
+        return Allocation(x, tau.copy(), produced, tau - produced, saturated)
 
 
 # --- actuator dynamics ------------------------------------------------------------------------

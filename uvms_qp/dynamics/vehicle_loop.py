@@ -141,6 +141,16 @@ class VelocityLoop:
                                  f"{', '.join(NU_NAMES)}")
         self.actuated: tuple[str, ...] = tuple(d for d in NU_NAMES if d in dofs)
         self._mask = np.array([d in self.actuated for d in NU_NAMES], dtype=float)
+        if integral_limit is None:
+            limit = np.full(6, math.inf)
+        else:
+            limit = as_vector(integral_limit, "integral_limit", 6, allow_inf=True)
+            if not limit.min() > 0.0:
+                j = int(np.argmin(limit))
+                raise InputError(f"integral_limit: expected positive bounds, got {limit[j]:g} "
+                                 f"on DOF {NU_NAMES[j]}")
+        self._integral_limit = limit.copy()
+        self._bound = np.zeros(6)  # on |I|: ki |I| within the integral limit
         self._kp = np.zeros(6)
         self._ki = np.zeros(6)
         self.set_gains(kp, ki)
@@ -160,16 +170,7 @@ class VelocityLoop:
                     j = int(np.argmin(array))
                     raise InputError(f"{name}: expected magnitudes >= 0, got {array[j]:g} on "
                                      f"DOF {NU_NAMES[j]}")
-            self._damping = (dl, dq)
-        if integral_limit is None:
-            limit = np.full(6, math.inf)
-        else:
-            limit = as_vector(integral_limit, "integral_limit", 6, allow_inf=True)
-            if not limit.min() > 0.0:
-                j = int(np.argmin(limit))
-                raise InputError(f"integral_limit: expected positive bounds, got {limit[j]:g} "
-                                 f"on DOF {NU_NAMES[j]}")
-        self._integral_limit = limit.copy()
+            self._damping = (dl * self._mask, dq * self._mask)
         self._integral = np.zeros(6)
         self._error = np.zeros(6)
 
@@ -242,6 +243,9 @@ class VelocityLoop:
             new.append(gains)
         self._kp[:] = new[0]
         self._ki[:] = new[1]
+        positive = self._ki > 0.0  # where ki = 0, I stays 0
+        self._bound[:] = 0.0
+        self._bound[positive] = self._integral_limit[positive] / self._ki[positive]
 
     @property
     def integral(self) -> FloatArray:
@@ -289,18 +293,17 @@ class VelocityLoop:
             advance[held] = 0.0
         integral = self._integral
         integral += advance
-        # clamp the integral term ki I to the integral limit (DOFs with ki = 0 keep I = 0)
-        ki = self._ki
-        with np.errstate(divide="ignore", invalid="ignore"):
-            bound = np.where(ki > 0.0, self._integral_limit / ki, 0.0)
-        np.clip(integral, -bound, bound, out=integral)
-        wrench = self._kp * error + ki * integral
+        # the integral term ki I within the integral limit (DOFs with ki = 0 keep I = 0)
+        bound = self._bound
+        np.minimum(integral, bound, out=integral)
+        np.maximum(integral, -bound, out=integral)
+        wrench = self._kp * error + self._ki * integral
         if self.restoring is not None:
             if q is None:
                 raise InputError("q: required to feed the restoring wrench forward")
             g = as_vector(self.restoring(q), "restoring(q)", 6)
             wrench += g * mask
         if self._damping is not None:
-            dl, dq = self._damping
-            wrench += (dl + dq * np.abs(reference)) * reference * mask
+            dl, dq = self._damping  # zero on passive DOFs
+            wrench += (dl + dq * np.abs(reference)) * reference
         return wrench

@@ -241,3 +241,32 @@ def test_step_errors_name_the_culprit():
     with pytest.raises(NonFiniteError, match="unmet contains"):
         VelocityLoop(np.ones(6), np.ones(6), dt=DT).step(
             np.zeros(6), np.zeros(6), unmet=[math.inf, 0, 0, 0, 0, 0])
+
+
+# --- stability margins of the default gains ---------------------------------------------------
+
+
+def thruster_lag(s, third_order):
+    if third_order:  # von Benzon et al. (2022)'s identified T200 response
+        return (6136 * s + 108700) / (s ** 3 + 89 * s ** 2 + 9258 * s + 108700)
+    return 1.0 / (LAG * s + 1.0)
+
+
+def phase_margin(axis, *, third_order=False, inertia_scale=1.0):
+    """Phase margin [deg] of one axis: PI, thrust lag, a half-period hold delay, the plant."""
+    kp, ki = pole_placement_gains(TOTAL, LINEAR)
+    w = np.logspace(-2, 3, 100001)
+    s = 1j * w
+    loop = ((kp[axis] + ki[axis] / s) * thruster_lag(s, third_order) * np.exp(-s * DT / 2)
+            / (inertia_scale * TOTAL[axis] * s + LINEAR[axis]))
+    crossing = np.argmin(np.abs(np.abs(loop) - 1.0))
+    return 180.0 + np.degrees(np.angle(loop[crossing])), w[crossing]
+
+
+@pytest.mark.parametrize("axis", range(6))
+def test_default_gains_keep_a_phase_margin(axis):
+    margin, crossover = phase_margin(axis)
+    assert margin > 59.0  # 60.2 deg on the undamped axes
+    assert crossover < 0.3 / LAG  # well below the thrusters' bandwidth
+    assert phase_margin(axis, third_order=True)[0] > 60.0
+    assert phase_margin(axis, inertia_scale=0.5)[0] > 50.0  # half the modelled inertia
