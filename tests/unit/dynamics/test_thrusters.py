@@ -266,9 +266,9 @@ def test_feasible_wrench_is_reproduced_with_least_effort(heavy, allocator):
         tau = heavy.matrix @ u
         result = allocator.allocate(tau)
         scale = max(1.0, np.abs(tau).max())
-        assert np.abs(result.unmet).max() <= 1e-7 * scale
+        assert np.abs(result.unmet).max() <= 2e-7 * scale  # 7e-8 at most here
         assert result.feasible
-        np.testing.assert_allclose(result.produced, tau, atol=1e-7 * scale)
+        np.testing.assert_allclose(result.produced, tau, atol=2e-7 * scale)
         # least effort: the minimum-norm forces (inside the box here)
         minimum = pinv @ tau
         if np.all((minimum > heavy.lower) & (minimum < heavy.upper)):
