@@ -47,6 +47,7 @@ from ..errors import PlantDataError, UnknownParameterSetError
 from ..model import Model
 from ..model.bundled import bluerov2_heavy_alpha5
 from .parameters import BodyParameters, PlantParameters
+from .thrusters import ThrusterLayout
 
 VON_BENZON_2022 = ("von Benzon, Sorensen, Uth, Ouerghi, Gabrielsson, Johansen (2022), "
                    "J. Mar. Sci. Eng. 10(12):1898")
@@ -212,7 +213,9 @@ def bluerov2_heavy_von_benzon_2022() -> PlantParameters:
         links=alpha5_like_links(_arm_model(), rho),
         water_density=rho,
         gravity=9.82,
-        source=f"vehicle: {VON_BENZON_2022}; arm: {ALPHA5_LIKE}",
+        thrusters=ThrusterLayout.bluerov2_heavy(),
+        source=f"vehicle: {VON_BENZON_2022}; arm: {ALPHA5_LIKE}; thrusters: "
+               "the Heavy's eight T200 at 16 V",
     )
 
 
@@ -226,7 +229,10 @@ def bluerov2_wu_2018() -> PlantParameters:
         links=alpha5_like_links(_arm_model(), rho),
         water_density=rho,
         gravity=9.81,
-        source=f"vehicle: {WU_2018}; arm: {ALPHA5_LIKE}",
+        thrusters=ThrusterLayout.bluerov2_heavy(),
+        source=f"vehicle: {WU_2018}; arm: {ALPHA5_LIKE}; thrusters: the Heavy's eight T200 "
+               "at 16 V (the standard vehicle's six would leave roll and pitch passive, which "
+               "the bundled model actuates)",
     )
 
 

@@ -8,7 +8,8 @@ per servo tick, and the run's states), next to the kinematic metrics of
   [rad/s]): ``nu_ref - nu`` at the start of every servo tick, the reference being the
   controller's command;
 - ``roll_max`` and ``pitch_max`` [rad]: the largest ``|phi|`` and ``|theta|`` of the vehicle
-  (the disturbance the arm's motion and a payload cause), ``roll_rms`` and ``pitch_rms``;
+  (the disturbance the arm's motion and a payload cause), ``roll_rms`` and ``pitch_rms`` (of
+  any spatial vehicle, kinematic runs too);
 - ``thrust_max`` (by thruster) [N]: the largest force magnitude; ``saturation_share`` (by
   thruster): the share of servo ticks whose allocated command sat at a force limit, and
   ``saturation_share_max``;
@@ -37,12 +38,23 @@ def _rounded(values: Any) -> list[float]:
     return [float(x) for x in values]
 
 
+def attitude_metrics(result: SimulationResult) -> dict[str, float]:
+    """``roll_max``, ``pitch_max``, ``roll_rms``, ``pitch_rms`` [rad] of a spatial vehicle."""
+    eta = result.eta
+    if eta.shape[1] != 6 or not eta.shape[0]:
+        return {}
+    roll, pitch = eta[:, 3], eta[:, 4]
+    return {"roll_max": float(np.max(np.abs(roll))), "pitch_max": float(np.max(np.abs(pitch))),
+            "roll_rms": float(np.sqrt(np.mean(roll * roll))),
+            "pitch_rms": float(np.sqrt(np.mean(pitch * pitch)))}
+
+
 def dynamic_metrics(result: SimulationResult) -> dict[str, Any]:
-    """The metrics above of a dynamic run (an empty dict for a kinematic one)."""
+    """The metrics above: roll and pitch of any spatial vehicle, the rest on a dynamic plant."""
+    out: dict[str, Any] = attitude_metrics(result)
     series: DynamicSeries | None = result.dynamics
     if series is None:
-        return {}
-    out: dict[str, Any] = {}
+        return out
     ticks = series.time.shape[0]
     actuated = [_NU.index(d) for d in series.actuated]
     if ticks:
@@ -52,13 +64,6 @@ def dynamic_metrics(result: SimulationResult) -> dict[str, Any]:
         names = [_NU[i] for i in actuated]
         out["velocity_tracking_error_rms"] = dict(zip(names, _rounded(rms), strict=True))
         out["velocity_tracking_error_max"] = dict(zip(names, _rounded(peak), strict=True))
-    eta = result.eta
-    if eta.shape[1] == 6 and eta.shape[0]:
-        roll, pitch = eta[:, 3], eta[:, 4]
-        out["roll_max"] = float(np.max(np.abs(roll)))
-        out["pitch_max"] = float(np.max(np.abs(pitch)))
-        out["roll_rms"] = float(np.sqrt(np.mean(roll * roll)))
-        out["pitch_rms"] = float(np.sqrt(np.mean(pitch * pitch)))
     names = list(series.thruster_names)
     if ticks:
         thrust = np.max(np.abs(series.thrust), axis=0)

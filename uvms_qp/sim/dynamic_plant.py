@@ -30,13 +30,14 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..dynamics import (
+    DEFAULT_STEP,
     FloatingPlant,
     ThrustAllocator,
     ThrusterDynamics,
+    ThrusterLayout,
     VelocityLoop,
-    thruster_layout,
 )
-from ..errors import InputError
+from ..errors import InputError, PlantDataError
 from ..model.vehicle import NU_NAMES
 from .plant_config import PlantSpec
 from .plants import RateFunction
@@ -51,6 +52,27 @@ def _whole(ratio: float, what: str) -> int:
     if count < 1 or abs(ratio - count) > RATE_TOLERANCE * max(1.0, ratio):
         raise InputError(f"{what}: expected a whole multiple, got a ratio of {ratio:g}")
     return int(count)
+
+
+def thruster_layout(parameters: Any, voltage: float | None) -> ThrusterLayout:
+    """The thruster layout of a parameter set, at another supply ``voltage`` [V] if given.
+
+    Raises:
+        PlantDataError: the set has no thrusters. InputError: a voltage for a layout that is not
+            the bundled T200 one (a user's table sets its own limits), or without published
+            T200 figures.
+    """
+    layout = parameters.thrusters
+    if not isinstance(layout, ThrusterLayout):
+        raise PlantDataError(
+            f"parameters {parameters.name!r} have no thruster layout: a dynamic plant needs "
+            "the vehicle's thrusters (positions, axes, limits; docs/dynamics.md)")
+    if voltage is None:
+        return layout
+    if not layout.name.startswith("bluerov2_heavy"):
+        raise InputError(f"supply_voltage: applies to the bundled T200 layout; layout "
+                         f"{layout.name!r} sets its own force limits")
+    return ThrusterLayout.bluerov2_heavy(voltage)
 
 
 @dataclass
@@ -121,17 +143,17 @@ class DynamicPlant:
             raise InputError("plant: a dynamic plant needs a parameter set")
         params = spec.parameters
         velocity = None if current is None else current.velocity()
-        self.physics = FloatingPlant(model, params, current=velocity)
+        physics = spec.physics_step or DEFAULT_STEP
+        self.physics = FloatingPlant(model, params, current=velocity, step=physics)
         self.model = model
         self.spec = spec
         self.dt = dt
         self.servo_period = 1.0 / spec.servo_rate
         self.servo_ticks = _whole(dt / self.servo_period, "control period / servo period")
-        physics = spec.physics_step or self.physics.default_step
         self.physics_steps = _whole(self.servo_period / physics,
                                     "servo period / physics step")
         self.physics_step = self.servo_period / self.physics_steps
-        layout = thruster_layout(params, spec.supply_voltage, model)
+        layout = thruster_layout(params, spec.supply_voltage)
         self.layout = layout
         self.allocator = ThrustAllocator(layout)
         self.thrusters = ThrusterDynamics(layout)
@@ -232,7 +254,8 @@ class DynamicPlant:
             records["wrench_unmet"].append(allocation.unmet)
             records["velocity_reference"].append(nu_ref)
             records["joint_reference"].append(joint_ref)
-            records["joint_torque"].append(physics.joint_torques)
+            records["joint_torque"].append(
+                physics.accelerations(q, v, thrusters.wrench(), joint_ref, time)[1])
         self._q, self._v = q, v
         return q
 

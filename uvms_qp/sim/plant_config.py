@@ -8,7 +8,7 @@
     physics_step = 0.002             # [s] fixed step of the equations of motion
     servo_rate = 100.0               # [Hz] velocity loop, allocation and joint servos
     coordination = true              # arm levels re-solved with the measured vehicle velocity
-    supply_voltage = 16.0            # [V] thruster force limits (12, 16 or 20)
+    supply_voltage = 16.0            # [V] T200 force limits (12, 16 or 20; default: the set's)
 
     [plant.payload]                  # taken by the tool at a time (a scenario's pick-up)
     time = 15.0                      # [s]
@@ -80,18 +80,19 @@ class PlantSpec:
         servo_rate: Rate of the velocity loop, thruster allocation and joint servos [Hz].
         coordination: Re-solve the arm's levels with the measured vehicle velocity
             (Simetti et al. (2014)) on a dynamic plant.
-        supply_voltage: Thruster supply [V], which sets their force limits.
+        supply_voltage: T200 supply [V] (12, 16, 20), which sets their force limits, or None
+            for the parameter set's own layout.
         payload: A payload taken by the tool during the run, or None.
         proportional: Velocity-loop proportional gains per body DOF (6,), None for the default.
         integral: Velocity-loop integral gains per body DOF (6,), None for the default.
     """
 
     kind: str = "kinematic"
-    parameters: Any = None
+    parameters: Any = field(default=None, repr=False)
     physics_step: float | None = None
     servo_rate: float = 100.0
     coordination: bool = False
-    supply_voltage: float = 16.0
+    supply_voltage: float | None = None
     payload: Payload | None = None
     proportional: FloatArray | None = field(default=None, repr=False)
     integral: FloatArray | None = field(default=None, repr=False)
@@ -143,7 +144,7 @@ def read_plant(table: Table | None, model: Any, base: Path) -> PlantSpec:
     step = table.take_number("physics_step", None, positive=True)
     rate = float(table.take_number("servo_rate", 100.0, positive=True) or 100.0)
     coordination = table.take_bool("coordination", False)
-    voltage = float(table.take_number("supply_voltage", 16.0, positive=True) or 16.0)
+    voltage = table.take_number("supply_voltage", None, positive=True)
     payload = _read_payload(table.take_table("payload", keys=PAYLOAD_KEYS))
     gains = table.take_table("gains", keys=GAIN_KEYS)
     proportional = integral = None
