@@ -50,7 +50,7 @@ RATE_TOLERANCE = 1e-9
 def _whole(ratio: float, what: str) -> int:
     count = round(ratio)
     if count < 1 or abs(ratio - count) > RATE_TOLERANCE * max(1.0, ratio):
-        raise InputError(f"{what}: expected a whole multiple, got a ratio of {ratio:g}")
+        raise InputError(f"{what} must be a whole number >= 1, got {ratio:g}")
     return int(count)
 
 
@@ -149,9 +149,12 @@ class DynamicPlant:
         self.spec = spec
         self.dt = dt
         self.servo_period = 1.0 / spec.servo_rate
-        self.servo_ticks = _whole(dt / self.servo_period, "control period / servo period")
+        self.servo_ticks = _whole(dt / self.servo_period,
+                                  f"servo_rate: the control period {dt:g} s / the servo period "
+                                  f"{self.servo_period:g} s")
         self.physics_steps = _whole(self.servo_period / physics,
-                                    "servo period / physics step")
+                                    f"physics_step: the servo period {self.servo_period:g} s / "
+                                    f"the physics step {physics:g} s")
         self.physics_step = self.servo_period / self.physics_steps
         layout = thruster_layout(params, spec.supply_voltage)
         self.layout = layout

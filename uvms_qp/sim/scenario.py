@@ -260,7 +260,26 @@ class Scenario:
             spec = self.plant.as_kind(kind, self.model)
         except UvmsQpError as exc:
             raise ConfigError(str(exc), path) from exc
-        return dataclasses.replace(self, plant=spec)
+        scenario = dataclasses.replace(self, plant=spec)
+        scenario._check_plant(path)
+        return scenario
+
+    def _check_plant(self, path: str = "plant") -> None:
+        """Build the dynamic plant once (when it has parameters), so that bad settings fail now.
+
+        Checks that the parameters describe the model (a body per joint), that the thrusters can
+        produce every DOF the vehicle actuates, and that the servo period divides the control
+        period and the physics step the servo period.
+
+        Raises:
+            ConfigError: at ``path``, with the reason.
+        """
+        if self.plant.parameters is None:
+            return
+        try:
+            DynamicPlant(self.model, self.plant, self.dt, self.current)
+        except UvmsQpError as exc:
+            raise ConfigError(str(exc), path) from exc
 
     def with_duration(self, duration: Any, path: str = "duration") -> Scenario:
         """This scenario with another simulated time [s] (same step cap).
@@ -752,6 +771,7 @@ def scenario_from_dict(
         sensors=sensors,
     )
     check_periods(tables, stack, dt)
+    scenario._check_plant()
     scenario._check_objects(stack)
     try:
         controller = scenario.make_controller(stack=stack)
