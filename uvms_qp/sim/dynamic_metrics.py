@@ -17,6 +17,10 @@ per servo tick, and the run's states), next to the kinematic metrics of
 - ``joint_torque_max`` (by joint) [N m]: the largest torque a joint's servo produced;
 - ``unmet_wrench_max`` [N, N m]: the largest part of a demanded wrench the thrusters could not
   give (0 when the allocation always met the demand).
+
+A scenario phase gets ``roll_max``, ``pitch_max`` and, on a dynamic plant, ``energy`` (drawn
+within the window), ``power_mean`` and ``saturation_share_max`` of its window
+(:func:`phase_metrics`).
 """
 
 from __future__ import annotations
@@ -78,4 +82,32 @@ def dynamic_metrics(result: SimulationResult) -> dict[str, Any]:
         out["joint_torque_max"] = dict(zip(result.joint_names, _rounded(torque), strict=True))
         unmet = np.max(np.abs(series.wrench_unmet))
         out["unmet_wrench_max"] = float(unmet)
+    return out
+
+
+def phase_metrics(result: SimulationResult, start: float, end: float) -> dict[str, Any]:
+    """Attitude and actuator metrics of the window ``start <= t <= end`` [s] (module docstring)."""
+    out: dict[str, Any] = {}
+    eta, t = result.eta, result.time_states
+    eps = 1e-9 * max(1.0, float(t[-1])) if t.size else 0.0
+    if eta.shape[1] == 6:
+        mask = (t >= start - eps) & (t <= end + eps)
+        if mask.any():
+            out["roll_max"] = float(np.max(np.abs(eta[mask, 3])))
+            out["pitch_max"] = float(np.max(np.abs(eta[mask, 4])))
+    series: DynamicSeries | None = result.dynamics
+    if series is None or not series.time.size:
+        return out
+    ticks = (series.time >= start - eps) & (series.time < end - eps)
+    if not ticks.any():
+        return out
+    index = np.flatnonzero(ticks)
+    first, last = int(index[0]), int(index[-1])
+    before = float(series.energy[first - 1]) if first else 0.0
+    energy = float(series.energy[last]) - before
+    span = float(series.time[last] - series.time[first]) + (
+        float(series.time[1] - series.time[0]) if series.time.size > 1 else 0.0)
+    out["energy"] = energy
+    out["power_mean"] = energy / span if span > 0.0 else 0.0
+    out["saturation_share_max"] = float(np.mean(series.saturated[ticks], axis=0).max())
     return out

@@ -40,6 +40,7 @@ from ..safety import STAGES
 from ..stack import Stack
 from . import metrics as run_metrics
 from .dynamic_metrics import dynamic_metrics
+from .dynamic_metrics import phase_metrics as dynamic_phase_metrics
 from .probes import Probes
 from .units import joint_units, zeta_units
 
@@ -206,7 +207,8 @@ class SimulationResult:
 
     def phase_metrics(self) -> dict[str, dict[str, Any]]:
         """Metrics of every scenario phase, by phase name."""
-        return {name: run_metrics.phase_metrics(self, a, b) for name, (a, b) in self.phases.items()}
+        return {name: {**run_metrics.phase_metrics(self, a, b), **dynamic_phase_metrics(self, a, b)}
+                for name, (a, b) in self.phases.items()}
 
 
 def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: FloatArray,
