@@ -28,7 +28,17 @@ Layout (units as in :class:`~uvms_qp.dynamics.parameters.BodyParameters`)::
     [links.axis_e]                       # one table per arm joint, same keys, joint frame
     ...
 
-With ``base``, a ``[vehicle]`` or ``[links.<joint>]`` table changes only the keys it gives.
+    [[thrusters]]                        # one table per thruster (FRD body frame)
+    position = [0.14, 0.092, 0.0]        # [m]
+    axis = [-0.707, 0.707, 0.0]          # direction of positive thrust
+    model = "T200"                       # its published limits, dead band, lag and power
+    voltage = 16.0                       # [V]
+    ...
+
+With ``base``, a ``[vehicle]`` or ``[links.<joint>]`` table changes only the keys it gives, and
+the base's thrusters stay unless the file lists its own. ``thrusters`` may also be a table with
+the keys of :meth:`~uvms_qp.dynamics.ThrusterLayout.from_mapping` (``axes = "flu"``,
+``actuated``, ``defaults``, and its own ``thrusters`` list).
 """
 
 from __future__ import annotations
@@ -38,12 +48,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import ModelFileError, ParameterError, UnknownParameterSetError
+from ..errors import ConfigError, ModelFileError, ParameterError, UnknownParameterSetError
 from .bundled import plant_parameters
 from .parameters import BODY_FIELDS, BodyParameters, PlantParameters, parameter_path
+from .thrusters import AllocationRankError, ThrusterLayout
 
 _TOP_KEYS = ("name", "source", "base", "water_density", "gravity", "joint_servo_time_constant",
-             "vehicle", "links")
+             "vehicle", "links", "thrusters")
 _BODY_KEYS = (*BODY_FIELDS, "source")
 _MAX_BYTES = 1_000_000
 
@@ -80,6 +91,19 @@ def _body(table: Mapping[str, Any], base: BodyParameters | None, path: str,
                              value=values["source"])
     with parameter_path(path, file):
         return BodyParameters(**values)
+
+
+def _thrusters(value: Any, file: str) -> ThrusterLayout:
+    """The thruster layout of a file's ``thrusters`` (a list of thrusters or a layout table)."""
+    mapping = {"thrusters": value} if isinstance(value, list) else value
+    try:
+        return ThrusterLayout.from_mapping(_table(mapping, "thrusters", file))
+    except AllocationRankError as exc:
+        raise ParameterError(str(exc), "thrusters", file=file) from None
+    except ConfigError as exc:
+        inner = exc.path if isinstance(value, list) or not exc.path else f"thrusters.{exc.path}"
+        message = str(exc).split(": ", 1)[-1] if exc.path else str(exc)
+        raise ParameterError(message, inner or "thrusters", file=file) from None
 
 
 def load_plant_parameters(path: str | Path) -> PlantParameters:
@@ -129,6 +153,8 @@ def load_plant_parameters(path: str | Path) -> PlantParameters:
     for key in ("source", "water_density", "gravity", "joint_servo_time_constant"):
         if key in data:
             changes[key] = data[key]
+    if "thrusters" in data:
+        changes["thrusters"] = _thrusters(data["thrusters"], file)
     if base is not None and "source" not in data:
         changes["source"] = f"{file}, from {base.name}"
     with parameter_path("", file):

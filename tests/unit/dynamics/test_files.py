@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from uvms_qp.dynamics import FloatingPlant, load_plant_parameters
+from uvms_qp.dynamics import FloatingPlant, ThrusterLayout, load_plant_parameters
 from uvms_qp.errors import ModelFileError, ParameterError
 
 EXAMPLE = Path(str(resources.files("uvms_qp.dynamics").joinpath("data/example_plant.toml")))
@@ -122,3 +122,63 @@ def test_a_file_whose_links_miss_a_joint_fails_at_the_plant(tmp_path, rov):
     params = load_plant_parameters(write(tmp_path, text))
     with pytest.raises(Exception, match="axis_b"):
         FloatingPlant(rov, params)
+
+
+FOUR_THRUSTERS = """
+name = "quad"
+base = "bluerov2_heavy_von_benzon_2022"
+[[thrusters]]
+position = [0.2, 0.1, 0.0]
+axis = [1.0, 0.0, 0.0]
+model = "T200"
+[[thrusters]]
+position = [0.2, -0.1, 0.0]
+axis = [1.0, 0.0, 0.0]
+model = "T200"
+[[thrusters]]
+position = [0.0, 0.0, 0.1]
+axis = [0.0, 1.0, 0.0]
+model = "T200"
+voltage = 12.0
+[[thrusters]]
+position = [0.1, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+forward_limit = 20.0
+reverse_limit = 10.0
+time_constant = 0.05
+power_forward = [1.0, 1.5]
+power_reverse = [1.0, 1.5]
+"""
+
+
+def test_a_file_gives_its_own_thrusters_or_keeps_the_bases():
+    assert isinstance(load_plant_parameters(EXAMPLE).thrusters, ThrusterLayout)
+
+
+def test_own_thrusters_replace_the_bases_and_the_layout_is_checked(tmp_path):
+    path = write(tmp_path, FOUR_THRUSTERS)
+    with pytest.raises(ParameterError, match=r"thrusters: .*cannot produce") as info:
+        load_plant_parameters(path)  # four thrusters cannot give six DOFs
+    assert str(path) in str(info.value)
+    text = FOUR_THRUSTERS.replace("[[thrusters]]", "[[thrusters.thrusters]]", 4)
+    text = text.replace('base = "bluerov2_heavy_von_benzon_2022"\n',
+                        'base = "bluerov2_heavy_von_benzon_2022"\n[thrusters]\n'
+                        'actuated = ["u", "v", "w", "r"]\n')
+    params = load_plant_parameters(write(tmp_path, text, "quad.toml"))
+    layout = params.thrusters
+    assert layout.size == 4 and layout.actuated == ("u", "v", "w", "r")
+    # a T200 at 12 V against one given by hand
+    np.testing.assert_allclose(layout.upper, [51.5, 51.5, 36.4, 20.0])
+    np.testing.assert_allclose(layout.matrix[:, 0], [1, 0, 0, 0, 0, -0.1])  # r x a, FRD
+
+
+@pytest.mark.parametrize(("change", "key"), [
+    (("axis = [0.0, 0.0, 1.0]", "axis = [0.0, 1.0]"), "thrusters[3].axis"),
+    (("model = \"T200\"\nvoltage = 12.0", "model = \"T200\"\nvoltage = 13.0"), "thrusters[2]"),
+    (("time_constant = 0.05", "time_constant = 0.05\nspin = 1"), "thrusters[3]"),
+])
+def test_a_bad_thruster_names_file_and_key(tmp_path, change, key):
+    path = write(tmp_path, FOUR_THRUSTERS.replace(*change))
+    with pytest.raises(ParameterError) as info:
+        load_plant_parameters(path)
+    assert f"{path}: {key}" in str(info.value)
