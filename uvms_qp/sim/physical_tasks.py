@@ -1,4 +1,4 @@
-"""The mission's physical tasks, measured on the floating vehicle (the table of ``docs/dynamics.md``).
+"""The mission's physical tasks measured on the floating vehicle (``docs/dynamics.md``).
 
 Station keeping, current alignment and the payload moment exist for physical reasons, and
 arm-vehicle coordination for a physical lag: their benefit shows only on a plant that does not
