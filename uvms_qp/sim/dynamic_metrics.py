@@ -18,7 +18,7 @@ per servo tick, and the run's states), next to the kinematic metrics of
 - ``unmet_wrench_max`` [N, N m]: the largest part of a demanded wrench the thrusters could not
   give (0 when the allocation always met the demand).
 
-A scenario phase gets ``roll_max``, ``pitch_max`` and, on a dynamic plant, ``energy`` (drawn
+A scenario phase gets ``roll_max``, ``pitch_max``, ``pitch_rms`` and, on a dynamic plant, ``energy`` (drawn
 within the window), ``power_mean`` and ``saturation_share_max`` of its window
 (:func:`phase_metrics`).
 """
@@ -93,8 +93,10 @@ def phase_metrics(result: SimulationResult, start: float, end: float) -> dict[st
     if eta.shape[1] == 6:
         mask = (t >= start - eps) & (t <= end + eps)
         if mask.any():
-            out["roll_max"] = float(np.max(np.abs(eta[mask, 3])))
-            out["pitch_max"] = float(np.max(np.abs(eta[mask, 4])))
+            roll, pitch = eta[mask, 3], eta[mask, 4]
+            out["roll_max"] = float(np.max(np.abs(roll)))
+            out["pitch_max"] = float(np.max(np.abs(pitch)))
+            out["pitch_rms"] = float(np.sqrt(np.mean(pitch * pitch)))
     series: DynamicSeries | None = result.dynamics
     if series is None or not series.time.size:
         return out
