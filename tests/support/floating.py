@@ -138,6 +138,77 @@ class FossenVehicle:
         return np.concatenate((R @ nu[:3], T @ nu[3:], self.M_inv @ rhs))
 
 
+def coriolis_theorem_3_2(M: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """``C(nu) nu`` of a symmetric 6x6 ``M`` by Fossen (2011), Theorem 3.2."""
+    a1 = M[:3, :3] @ nu[:3] + M[:3, 3:] @ nu[3:]
+    a2 = M[3:, :3] @ nu[:3] + M[3:, 3:] @ nu[3:]
+    C = np.block([[np.zeros((3, 3)), -skew(a1)], [-skew(a1), -skew(a2)]])
+    return C @ nu
+
+
+@dataclass
+class LockedUVMS:
+    """The UVMS with its joints held: one rigid body whose parts each keep their own hydrodynamics.
+
+    ``M_RB = sum X_i^T M_RB,i X_i`` and ``M_A = sum X_i^T M_A,i X_i`` with ``X_i`` the motion
+    transform from the vehicle frame to body ``i`` (from the held joints), Coriolis terms by
+    Theorem 3.2 of each composite matrix, damping ``sum X_i^T D_i(X_i nu_r) X_i nu_r``, the
+    restoring vector from every weight and buoyancy, Euler-angle kinematics.
+    """
+
+    model: Model
+    params: PlantParameters
+    joints: np.ndarray
+    wrench: np.ndarray
+    current: np.ndarray
+
+    def __post_init__(self) -> None:
+        q = self.model.configuration(np.zeros(6), self.joints)
+        data = kinematics(self.model, q, np.zeros(self.model.pin_model.nv))
+        self.parts = []
+        self.M_RB = np.zeros((6, 6))
+        self.M_A = np.zeros((6, 6))
+        self.loads = []  # (point in the vehicle frame, world force) of each weight and buoyancy
+        g, rho = self.params.gravity, self.params.water_density
+        for jid, body in bodies(self.model, self.params):
+            M = data.oMi[jid]                    # body i in the vehicle frame (vehicle at I)
+            X = M.inverse().action               # vehicle twist -> body i twist
+            self.parts.append((X, body))
+            self.M_RB += X.T @ rigid_inertia(body) @ X
+            self.M_A += X.T @ body.added_mass @ X
+            self.loads.append((M.rotation @ body.centre_of_gravity + M.translation,
+                               np.array([0.0, 0.0, body.mass * g])))
+            self.loads.append((M.rotation @ body.centre_of_buoyancy + M.translation,
+                               np.array([0.0, 0.0, -rho * g * body.volume])))
+        self.M_inv = np.linalg.inv(self.M_RB + self.M_A)
+
+    def restoring(self, R: np.ndarray) -> np.ndarray:
+        """``g(eta)``: minus the body wrench of every weight and buoyancy."""
+        total = np.zeros(6)
+        for point, force in self.loads:
+            f = R.T @ force
+            total += np.concatenate((f, np.cross(point, f)))
+        return -total
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        eta, nu = y[:6], y[6:]
+        phi, theta, psi = eta[3:]
+        R = rotation_rpy(phi, theta, psi)
+        sf, cf, ct, tt = math.sin(phi), math.cos(phi), math.cos(theta), math.tan(theta)
+        T = np.array([[1, sf * tt, cf * tt], [0, cf, -sf], [0, sf / ct, cf / ct]])
+        vc = R.T @ self.current
+        nu_r = nu - np.concatenate((vc, np.zeros(3)))
+        nu_c_dot = np.concatenate((-np.cross(nu[3:], vc), np.zeros(3)))
+        damping = np.zeros(6)
+        for X, body in self.parts:
+            rel = X @ nu_r
+            damping += X.T @ ((body.linear_damping + body.quadratic_damping * np.abs(rel)) * rel)
+        rhs = (self.wrench - coriolis_theorem_3_2(self.M_RB, nu)
+               - coriolis_theorem_3_2(self.M_A, nu_r) - damping - self.restoring(R)
+               + self.M_A @ nu_c_dot)
+        return np.concatenate((R @ nu[:3], T @ nu[3:], self.M_inv @ rhs))
+
+
 # --- sums over the bodies of the whole chain --------------------------------------------------
 
 def bodies(model: Model, params: PlantParameters) -> list[tuple[int, BodyParameters]]:

@@ -70,12 +70,12 @@ def von_benzon_2022_vehicle() -> BodyParameters:
     return BodyParameters(
         mass=13.5,                                             # [kg]
         inertia=np.diag([0.26, 0.23, 0.37]),                   # Ixx, Iyy, Izz [kg m^2]
-        centre_of_gravity=(0.0, 0.0, 0.0),                     # body origin at the CG
+        centre_of_gravity=np.zeros(3),                         # body origin at the CG
         volume=0.0134,                                         # [m^3]
-        centre_of_buoyancy=(0.0, 0.0, -0.01),                  # 1 cm above the CG (z down)
-        added_mass=[6.36, 7.12, 18.68, 0.189, 0.135, 0.222],  # -X_udot .. -N_rdot
-        linear_damping=[13.7, 0.0, 33.0, 0.0, 0.8, 0.0],       # -X_u .. -N_r
-        quadratic_damping=[141.0, 217.0, 190.0, 1.19, 0.47, 1.5],  # -X_u|u| .. -N_r|r|
+        centre_of_buoyancy=np.array([0.0, 0.0, -0.01]),        # 1 cm above the CG (z down)
+        added_mass=np.diag([6.36, 7.12, 18.68, 0.189, 0.135, 0.222]),  # -X_udot .. -N_rdot
+        linear_damping=np.array([13.7, 0.0, 33.0, 0.0, 0.8, 0.0]),  # -X_u .. -N_r
+        quadratic_damping=np.array([141.0, 217.0, 190.0, 1.19, 0.47, 1.5]),  # -X_u|u| ..
         source=VON_BENZON_2022,
     )
 
@@ -90,12 +90,12 @@ def wu_2018_vehicle() -> BodyParameters:
     return BodyParameters(
         mass=11.5,                                             # W = 112.8 N at g = 9.81
         inertia=np.diag([0.16, 0.16, 0.16]),
-        centre_of_gravity=(0.0, 0.0, 0.02),                    # 2 cm below the origin (CB)
+        centre_of_gravity=np.array([0.0, 0.0, 0.02]),          # 2 cm below the origin (CB)
         volume=114.8 / (1000.0 * 9.81),                        # B = 114.8 N
-        centre_of_buoyancy=(0.0, 0.0, 0.0),
-        added_mass=[5.5, 12.7, 14.57, 0.12, 0.12, 0.12],
-        linear_damping=[4.03, 6.22, 5.18, 0.07, 0.07, 0.07],
-        quadratic_damping=[18.18, 21.66, 36.99, 1.55, 1.55, 1.55],
+        centre_of_buoyancy=np.zeros(3),
+        added_mass=np.diag([5.5, 12.7, 14.57, 0.12, 0.12, 0.12]),
+        linear_damping=np.array([4.03, 6.22, 5.18, 0.07, 0.07, 0.07]),
+        quadratic_damping=np.array([18.18, 21.66, 36.99, 1.55, 1.55, 1.55]),
         source=WU_2018,
     )
 

@@ -191,6 +191,10 @@ class BodyParameters:
 
     __hash__ = None  # type: ignore[assignment]
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt through the constructor: validated again, arrays read-only again
+        return (BodyParameters, tuple(getattr(self, f) for f in (*BODY_FIELDS, "source")))
+
     def rigid_inertia(self) -> FloatArray:
         """Rigid-body spatial inertia at the body frame origin, ``[linear; angular]`` (6x6).
 
@@ -284,6 +288,13 @@ class PlantParameters:
                 and all(getattr(self, f) == getattr(other, f) for f in PLANT_FIELDS))
 
     __hash__ = None  # type: ignore[assignment]
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # the links' read-only view does not pickle: rebuilt from a plain dict (for workers of a
+        # parameter sweep)
+        return (PlantParameters, (self.name, self.vehicle, dict(self.links),
+                                  self.joint_servo_time_constant, self.water_density,
+                                  self.gravity, self.thrusters, self.source))
 
     def bodies(self) -> dict[str, BodyParameters]:
         """``{"vehicle": ..., "links.<joint>": ...}``: every body with its key path."""

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
+from scipy.linalg import lapack
 
 from .._validation import as_scalar, as_time, as_vector
 from ..errors import InputError, ModelError, PlantDataError, SimulationDiverged
@@ -346,7 +347,12 @@ class FloatingPlant:
         qdd = (reference - v[6:]) * self._inv_tau
         rhs = wrench - h[:6] - M[:6, 6:].dot(qdd)
         vdot = np.empty(self.nv)
-        vdot[:6] = np.linalg.solve(M[:6, :6], rhs)
+        _, vdot[:6], info = lapack.dposv(M[:6, :6], rhs)  # Cholesky: M_vv is positive definite
+        if info:
+            raise SimulationDiverged(
+                f"at t = {t:.6g} s the vehicle's mass matrix is not positive definite "
+                f"(LAPACK dposv info {info})", t=t, q=q.copy(), v=v.copy(),
+                reason="mass matrix not positive definite")
         vdot[6:] = qdd
         torques = M[6:].dot(vdot) + h[6:]
         return vdot, torques

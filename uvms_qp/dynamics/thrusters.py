@@ -271,6 +271,14 @@ class ThrusterLayout:
         name: Name of the layout (reports).
         source: Where the numbers come from (reports).
 
+    Attributes:
+        thrusters: The thrusters, in column order; ``names`` their names.
+        actuated: The actuated DOFs in ``nu`` order; ``actuated_mask`` (6,) bool.
+        matrix: ``B`` (6, n) [-, m].
+        lower, upper: Force limits (n,) [N] (``lower = -reverse_limit``).
+        wrench_lower, wrench_upper: The extreme wrench each DOF alone can receive (6,)
+            [N, N m]: ``sum_i min/max(B_ji lower_i, B_ji upper_i)``.
+
     Raises:
         AllocationRankError: the thrusters cannot produce an actuated DOF; the message names the
             DOFs whose rows depend on the others (a row of zeros: that DOF alone).

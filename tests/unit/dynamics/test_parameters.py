@@ -1,5 +1,7 @@
 """BodyParameters and PlantParameters: validation, scaling for sweeps, read-only values."""
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -134,3 +136,11 @@ def test_with_changes_validates_and_refuses_unknown_fields():
     with pytest.raises(ParameterError, match="gravity"):
         plant().with_changes(gravity=-9.81)
     assert plant().with_changes(thrusters="layout").thrusters == "layout"
+
+
+def test_parameters_pickle_for_the_workers_of_a_sweep(heavy):
+    copy = pickle.loads(pickle.dumps(heavy.scaled({"links.mass": 1.2})))
+    assert copy == heavy.scaled({"links.mass": 1.2})
+    assert not copy.vehicle.added_mass.flags.writeable
+    with pytest.raises(TypeError):
+        copy.links["extra"] = copy.vehicle  # type: ignore[index]
