@@ -19,3 +19,43 @@ def test_readme_python_example_tracks_the_goal_within_bounds(capsys):
     joints = model.split(q)[1]
     assert np.all(joints >= model.joint_lower - 1e-9) and np.all(joints <= model.joint_upper + 1e-9)
     assert "level 0" in capsys.readouterr().out
+
+
+def _status_line(summary: str) -> str:
+    return summary.splitlines()[0]
+
+
+def test_readme_stack_reads_as_proven_from_its_first_step():
+    """The README's stack, stopped after its first step: the printed summary says the command
+    is proven (optimal or damped, each level met or unmet, proven), not a failure."""
+    blocks = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
+    namespace: dict = {}
+    exec(compile(blocks[0].replace("range(100)", "range(1)"), "README.md", "exec"), namespace)
+    result = namespace["result"]
+    line = _status_line(result.summary())
+    assert result.ok and result.stage == "primary", result.summary()
+    assert re.search(r": (optimal|damped) \((every level met|levels? [0-9, ]+ unmet, proven "
+                     r"optimal)\)", line), line
+    for word in ("unproven", "backend_error", "fallback", "infeasible"):
+        assert word not in line
+    # the README says which entry starts on its bound, and why: the others are inside
+    on_bound = np.flatnonzero((result.zeta <= result.lower) | (result.zeta >= result.upper))
+    names = [namespace["model"].zeta_names[i] for i in on_bound]
+    assert names == ["axis_c"], names
+    assert "`axis_c`" in README.read_text()
+
+
+def test_demo_summary_reads_as_success(tmp_path, capsys):
+    """The README's first command prints the run's summary: every step proven optimal (the
+    lower levels unmet by design), the statuses counted under one word, none that reads like
+    a failure."""
+    from uvms_qp.cli import main
+
+    assert main(["run", "bluerov2_demo", "--out", str(tmp_path), "--no-plots"]) in (0, None)
+    out = capsys.readouterr().out
+    counts = [line for line in out.splitlines() if line.strip().startswith("status_counts")]
+    assert counts, out
+    statuses = dict(re.findall(r"([a-z_]+) (\d+)", counts[0].split("status_counts", 1)[1]))
+    assert set(statuses) == {"optimal"}, counts[0]
+    stages = [line for line in out.splitlines() if line.strip().startswith("stage_counts")]
+    assert stages and "primary" in stages[0] and "zero" not in stages[0], stages

@@ -206,10 +206,10 @@ def _primary_fails_on_damped_problems(controller, monkeypatch):
     primary, own = controller.safe.primary, controller.assembler.problem
     solve = primary.solve_problem
 
-    def failing(problem):
+    def failing(problem, *args, **kwargs):
         if problem is not own:
-            raise SolverError("time cap reached")
-        return solve(problem)
+            raise SolverError("deadline reached")
+        return solve(problem, *args, **kwargs)
 
     monkeypatch.setattr(primary, "solve_problem", failing)
 
@@ -228,7 +228,8 @@ def test_a_damped_problem_the_primary_cannot_answer_goes_to_the_alternate(monkey
         if result.damped_levels:
             damped += 1
             assert result.stage == "alternate"
-            assert "primary: no verified answer to the damped problem" in result.attempts
+            assert any("primary: no verified answer to the damped problem" in a
+                       for a in result.attempts)
         commands.append(result.zeta)
         q = model.integrate(q, result.zeta, DT)
     rates = np.asarray(model.joint_rate_limit)
@@ -249,23 +250,24 @@ def test_a_damped_problem_past_the_deadline_goes_to_no_other_back_end(monkeypatc
     primary, own = controller.safe.primary, controller.assembler.problem
     solve = primary.solve_problem
 
-    def slow(problem):  # a primary that runs past the deadline on the damped problems
+    def slow(problem, *args, **kwargs):  # a primary past the deadline on the damped problems
         if problem is not own:
             now[0] += 1.0
-            raise SolverError("time cap reached")
-        return solve(problem)
+            raise SolverError("deadline reached")
+        return solve(problem, *args, **kwargs)
 
     monkeypatch.setattr(primary, "solve_problem", slow)
     alternate_solve = controller.safe.alternate.solve_problem
     monkeypatch.setattr(controller.safe.alternate, "solve_problem",
-                        lambda problem: pytest.fail("the alternate ran past the deadline")
-                        if problem is not own else alternate_solve(problem))
+                        lambda problem, *args, **kwargs: pytest.fail(
+                            "the alternate ran past the deadline")
+                        if problem is not own else alternate_solve(problem, *args, **kwargs))
     q, late, said = model.home(), 0, 0
     for k in range(100):
         result = controller.step(model.state(q), k * DT)
         assert not result.damped_levels
         late += result.deadline_missed
-        said += any(a.startswith("damping: the step's deadline passed") for a in result.attempts)
+        said += any("damping: the step's deadline passed" in a for a in result.attempts)
         q = model.integrate(q, result.zeta, DT)
     assert late > 50  # every step whose damped problem the primary tried
     assert said == late  # and each says why its damping is missing
@@ -282,7 +284,7 @@ def test_a_damped_problem_no_back_end_answers_is_reported(monkeypatch):
         result = controller.step(model.state(q), k * DT)
         q = model.integrate(q, result.zeta, DT)
     assert not result.damped_levels and result.stage == "primary"
-    assert any(a.startswith("damping: no back-end answered") for a in result.attempts)
+    assert any("damping: no back-end answered" in a for a in result.attempts)
 
 
 # ---------------------------------------------------------------------------- activation

@@ -74,7 +74,7 @@ def test_certificate_agrees_with_the_oracle_on_seeded_families(fam, solver):
     for p in family(fam, 25, seed=100):
         problem = normalize_problem(p.levels_rows(), p.lower, p.upper, None, p.hard_rows())
         res = plain.solve_problem(problem)
-        if res.status.value not in ("optimal", "level_infeasible"):
+        if res.status.value != "optimal":
             continue
         assert_agree(*judge(problem, res.x))
 

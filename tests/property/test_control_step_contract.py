@@ -8,7 +8,7 @@ quadprog cascade) 100 examples x 100 steps = 10^4 steps in CI:
 
 * 0 non-finite commands; every command inside the hard box exactly (after saturation);
 * 0 hard-bound violations above 1e-7 before saturation (the solver's own x);
-* >= 99.9 % of the steps end on a verified solve (optimal / level_infeasible, or relaxed): the
+* >= 99.9 % of the steps end on a verified solve (optimal, or relaxed): the
   hard rows drawn here always contain zeta = 0, so they are jointly feasible.
 
 Run more by hand: ``HYPOTHESIS_PROFILE=dev RELIABILITY_EXAMPLES=1000 pytest ...``. The problem of

@@ -5,7 +5,7 @@ the tool), for each of the two stacks of :func:`uvms_qp.bench.problems.controlle
 tasks share rows: station keeping holds the yaw that current alignment asks for; a joint-limit
 margin task sits above a posture task on the same joint rates. On such stacks DAQP 0.11 left the
 lower level far from its optimum with exit flag 1 on about half of the states. Every step with
-a status that claims the lexicographic optimum (``optimal``, ``level_infeasible``) is judged by
+a status that claims the lexicographic optimum (``optimal``) is judged by
 the independent oracle (``tests/support/oracle/lexicographic.py``) on the problem the controller
 solved: no level may be improvable by more than 1e-6 of its scale. A step the certificate cannot
 prove says so (``unproven``), inside the box. Damping is off: a damped step is the optimum of

@@ -163,7 +163,8 @@ def base_problem(rng: np.random.Generator, n: int, box: str, n_levels: int | Non
     lower, upper, x0 = _box(rng, n, box)
     p = int(n_levels or rng.integers(2, 5))
     total = max(p, int(rng.integers(n // 2, 2 * n)))
-    cuts = np.sort(rng.choice(np.arange(1, total), size=p - 1, replace=False)) if p > 1 else []
+    cuts: Any = (np.sort(rng.choice(np.arange(1, total), size=p - 1, replace=False))
+                 if p > 1 else [])
     sizes = np.diff(np.concatenate(([0], cuts, [total]))).astype(int)
     spread = {"wide": 1.0, "tight": 0.5, "saturated": 4.0}[box]
     levels = []

@@ -42,7 +42,7 @@ class Record:
         problem: Problem name (unique within the set).
         solver: Solver or scheme name.
         trials: Trials attempted (control steps, or repeated solves of one problem).
-        successes: Verified successes: finite, status optimal/level_infeasible, every hard row
+        successes: Verified successes: finite, status optimal, every hard row
             within :data:`HARD_TOL`.
         failures: Failure reason -> count (e.g. ``{"hard_violation": 2, "backend_error": 1}``).
         times_us: Time of every timed trial [us] (failed ones too).

@@ -6,7 +6,7 @@ levels [6, 3, 1, 4] at n = 10, 13, 30). Solvers: ``daqp``, every installed ``cas
 ``nullspace`` (the closed form, saturated into the box), ``weighted`` (one weighted QP),
 ``scheme:*`` (the papers' closed-form schemes) and ``pink`` (when ``pin-pink`` is installed; on a
 scenario it solves its own, smaller problem: its row is marked ``*`` and has no time ratio). A
-success is verified: finite, status optimal, level_infeasible, damped or blended, hard rows within
+success is verified: finite, status optimal, damped or blended, hard rows within
 1e-7; every failure is counted with its reason. A closed loop's first step is a warm-up (verified,
 not timed); a p95 / p99 from fewer than 20 / 100 timed samples is printed n/a.
 

@@ -69,8 +69,12 @@ class Controller:
         strict: Raise :class:`~uvms_qp.errors.NoSolutionFound` when no back-end returns a
             verified solution, instead of degrading (relaxed levels, decayed previous command,
             zero; see :mod:`uvms_qp.safety` and ``docs/reliability.md``).
-        deadline: Wall-time budget of one step [s] (None: none); back-ends get matching time or
-            iteration limits and the fallback ladder skips its solver stages once it has passed.
+        deadline: Wall-time budget of one step [s]; ``"period"`` (the default): the control
+            period ``dt``; None: none (an offline simulation whose answers must not depend on
+            the machine's load: a scenario without a ``deadline`` key). Every part of the step
+            takes its time from it (the back-end, the certificate, the repair, the damping
+            screen), and the fallback ladder skips its solver stages once it has passed
+            (``docs/reliability.md``).
         damping: Damping threshold of every level that sets none (``Level(damping=...)``),
             >= 0: a level's directions whose singular value, in the freedom the higher levels
             leave, is below it get bounded rates (:mod:`uvms_qp.hqp.damping`); away from
@@ -86,7 +90,8 @@ class Controller:
     def __init__(self, model: Model, stack: Stack, solver: str = "daqp", dt: float = 0.05,
                  metric: Any = None, *, scheme: str = "hqp", priority_ratio: float = 1e4,
                  options: dict[str, Any] | None = None, strict: bool = False,
-                 deadline: float | None = None, damping: float = DEFAULT_THRESHOLD) -> None:
+                 deadline: float | str | None = "period",
+                 damping: float = DEFAULT_THRESHOLD) -> None:
         _check_arguments(model, solver, options, strict)
         if not isinstance(stack, Stack):
             raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
@@ -103,6 +108,10 @@ class Controller:
         self.damping = as_scalar(damping, "damping", nonnegative=True)
         self.assembler = StackAssembler(model, stack, self.dt, self.metric, self.damping)
         self.stack = self.assembler.stack
+        if isinstance(deadline, str):
+            if deadline != "period":
+                raise InputError(f"deadline: expected seconds, 'period' or None, got {deadline!r}")
+            deadline = self.dt
         self._scheme = SCHEMES[scheme](self.assembler, solver=solver, options=options,
                                        deadline=deadline, strict=self.strict,
                                        priority_ratio=self.priority_ratio)

@@ -10,7 +10,7 @@ import numpy as np
 from .._validation import FloatArray
 from ..hqp import HierarchyResult, Status, hard_violation
 from ..hqp.damping import Damping
-from ..hqp.result import OK_STATUSES
+from ..hqp.result import OK_STATUSES, levels_note
 from .history import HISTORY_WINDOW, CommandHistory, reversals_per_s
 
 #: Statuses of a verified answer of a scheme: the lexicographic optimum, damped or blended.
@@ -190,7 +190,7 @@ class StepResult:
     def ok(self) -> bool:
         """True when zeta is the scheme's verified answer.
 
-        The lexicographic optimum (``optimal``, ``level_infeasible``), or the controller's
+        The proven lexicographic optimum (``optimal``), or the controller's
         smoothed form of it: ``damped`` (the optimum of the stack with damping rows near a
         singularity) and ``blended`` (tasks ramping in or out); the hierarchy's own claim of
         the lexicographic optimum is :attr:`HierarchyResult.ok` of :attr:`hierarchy`.
@@ -232,7 +232,8 @@ class StepResult:
 
     def summary(self) -> str:
         """A readable report: status, time, per-level and per-task residuals with units."""
-        lines = [f"t = {self.t:.3f} s  {self.scheme}/{self.solver}: {self.status.value}  "
+        note = levels_note(self.hierarchy) if self.hierarchy is not None else ""
+        lines = [f"t = {self.t:.3f} s  {self.scheme}/{self.solver}: {self.status.value}{note}  "
                  f"step {self.step_time * 1e6:.0f} us"
                  + ("  (saturated into the box)" if self.saturated else "")
                  + (f"  [fallback: {self.stage}]" if self.stage != "primary" else "")]
@@ -240,7 +241,12 @@ class StepResult:
         err = self.task_errors
         for k, (names, violation) in enumerate(zip(self.level_names, self.level_violations,
                                                    strict=True)):
-            lines.append(f"  level {k}: violation {violation:.3e}")
+            mark = ""
+            if self.hierarchy is not None and self.hierarchy.ok and k < len(
+                    self.hierarchy.level_residuals):
+                mark = ("  unmet, proven optimal" if k in self.hierarchy.unmet_levels
+                        else "  met")
+            lines.append(f"  level {k}: violation {violation:.3e}{mark}")
             for name in names:
                 r, ru = res[name]
                 e, eu = err.get(name, (math.nan, ""))

@@ -35,14 +35,14 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
-from .._validation import as_time
+from .._validation import FloatArray, as_time
 from ..errors import InputError, NoSolutionFound
 from ..hqp import Problem, Status
 from ..hqp.damping import Damping, level_damping
 from ..hqp.measure import clip_to_box, evaluate
 from ..hqp.registry import get_spec
 from ..safety import DEGRADED_STAGES, SafeSolve, SafeSolver, default_alternate
-from ..safety.fallback import ALTERNATE, PRIMARY
+from ..safety.fallback import Damper
 from .assembler import StackAssembler
 from .result import StepResult
 
@@ -99,6 +99,7 @@ class _StackScheme:
         self.problem = problem
         self.solver_name = safe.name
         self.status_counts: Counter[str] = Counter()
+        self._damped_stack: Problem | None = None  # this step's damped problem, if any
 
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Fill the problem, solve it through the ladder, measure the command.
@@ -119,14 +120,19 @@ class _StackScheme:
         assembler.fill(state, t)
         self._prepare()
         excluded, ramping = assembler.activation()
+        problem = (assembler.problem if not excluded
+                   else assembler.derived(excluded, assembler.no_rows))
+        self._damped_stack = None
         try:
-            main, solved, damping = self._solve(excluded, start)
+            out = self.safe.solve(self._scheme_problem(problem), start,
+                                  self._damper(excluded, problem))
         except NoSolutionFound:
             assembler.check_box(state)
             raise
-        out: SafeSolve = main  # type: ignore[assignment]  # the ladder always answers
         if out.stage in DEGRADED_STAGES:  # e.g. an empty box, which no back-end can answer
             assembler.check_box(state)
+        damping = out.damping
+        solved = problem if damping is None or self._damped_stack is None else self._damped_stack
         status = out.result.status if damping is None else Status.DAMPED
         if ramping and out.solved:
             blend = self._blend(excluded, ramping, out, solved, start)
@@ -141,84 +147,29 @@ class _StackScheme:
         return assembler.step_result(out, t, step_time, self.name, self.solver_name,
                                      status, solved, damping, excluded, ramping)
 
-    def _solve(self, excluded: tuple[int, ...], start: float, ladder: bool = True
-               ) -> tuple[SafeSolve | None, Problem, Damping | None]:
-        """The answer to the stack without ``excluded``, damped where needed.
+    def _damper(self, excluded: tuple[int, ...], problem: Problem) -> Damper | None:
+        """The ladder's ``damped`` stage for the stack without ``excluded`` (None: no damping).
 
-        The ladder answers the main problem (``ladder``); the other solves of a step (the damped
-        problem, the subsets of a blend) are one verified call of the primary back-end each, and
-        are skipped once the step's deadline has passed.
-
-        Returns:
-            ``(outcome, problem solved, damping or None)``; the outcome is None when a solve
-            without the ladder fails.
+        At an answer ``x``: the damping rows of every level (:func:`level_damping`) and the
+        problem with them, as this scheme hands it to the ladder.
         """
+        thresholds = self.assembler.damping
+        if thresholds is None:
+            return None
         assembler = self.assembler
-        problem = (assembler.problem if not excluded
-                   else assembler.derived(excluded, assembler.no_rows))
-        if ladder:
-            out: SafeSolve | None = self.safe.solve(self._scheme_problem(problem), start)
-        else:
-            out = self._verified(problem, None)
-        thresholds = assembler.damping
-        if out is None or thresholds is None or not out.solved or self._late(start):
-            return out, problem, None
-        damping = level_damping(problem, out.x, thresholds, assembler.dt)
-        if not damping.acted:
-            return out, problem, None
-        damped = assembler.derived(excluded, damping.rows)
-        again = self._verified(damped, out)
-        if (again is None and ladder and self.safe.alternate is not None
-                and not self._late(start)):
-            # the primary failed on the damped problem (its time cap, an error): the alternate
-            # back-end answers it, as the ladder would; the undamped answer may chatter
-            again = self._verified(damped, out, ALTERNATE)
-        if again is None:
-            if not ladder:
-                return None, problem, None
-            # the damped problem unanswered: the undamped answer, said so (and why)
-            note = ("damping: the step's deadline passed before the damped problem was solved"
-                    if self._late(start) else
-                    "damping: no back-end answered the damped problem") + (
-                "; the undamped answer is kept")
-            return dataclasses.replace(out, attempts=(*out.attempts, note)), problem, None
-        return again, damped, damping
 
-    def _late(self, start: float) -> bool:
-        """The step's deadline has passed (no more optional solves)."""
-        deadline = self.safe.deadline
-        return deadline is not None and self.safe.clock() - start > deadline
+        def damper(x: FloatArray, end: float) -> tuple[Damping | None, Problem | None]:
+            damping = level_damping(problem, x, thresholds, assembler.dt, end=end,
+                                    clock=self.safe.clock)
+            if damping is None:
+                return None, problem  # the deadline passed in the screen
+            if not damping.acted:
+                return None, None
+            damped = assembler.derived(excluded, damping.rows)
+            self._damped_stack = damped
+            return damping, self._scheme_problem(damped)
 
-    def _verified(self, problem: Problem, main: SafeSolve | None, stage: str = PRIMARY
-                  ) -> SafeSolve | None:
-        """One verified solve by the primary back-end (no ladder), clipped into the box.
-
-        None when the back-end raises or does not return a verified answer (``optimal`` or
-        ``level_infeasible`` within the hard tolerance); the stage and the ladder's report are
-        those of ``main`` (the primary's, without one). With ``stage = ALTERNATE`` the
-        alternate back-end solves, the stage is ``alternate`` and the report says that the
-        primary failed on this problem.
-        """
-        solver = self.safe.primary if stage == PRIMARY else self.safe.alternate
-        assert solver is not None
-        try:
-            result = solver.solve_problem(self._scheme_problem(problem))
-        except Exception:  # any back-end exception, ours or foreign: the optional solve fails
-            return None
-        if not result.ok or result.hard_violation > solver.hard_tol * max(
-                1.0, problem.hard_scale):
-            return None
-        x, clipped = clip_to_box(result.x, problem.lower, problem.upper)
-        clipped = max(clipped, float(result.info.get("clipped", 0.0)))  # type: ignore[arg-type]
-        flagged = clipped > self.safe.clip_flag_tol
-        if main is None:
-            return SafeSolve(x, result, stage, (), clipped, flagged)
-        attempts = main.attempts
-        if stage != PRIMARY:
-            attempts = (*attempts, f"{PRIMARY}: no verified answer to the damped problem")
-        return SafeSolve(x, result, main.stage if stage == PRIMARY else stage, attempts,
-                         clipped, flagged, main.deadline_missed, main.relaxed_levels,
-                         main.elapsed)
+        return damper
 
     def _blend(self, excluded: tuple[int, ...], ramping: tuple[int, ...], main: SafeSolve,
                solved: Problem, start: float) -> SafeSolve | None:
@@ -226,11 +177,14 @@ class _StackScheme:
 
         ``sum_S prod_i a_i^[i in S] (1 - a_i)^[i not in S] x(S)`` over the subsets ``S`` of the
         ramping tasks (the continuous activation of Mansard, Khatib and Kheddar 2009, for scalar
-        activations); ``x`` of the full set is ``main``. None when a solve fails.
+        activations); ``x`` of the full set is ``main``. Each other subset is one solve of the
+        primary back-end through the ladder (:meth:`SafeSolver.solve_once`, damped where
+        needed); None when one fails or the deadline passes.
         """
         tasks = self.assembler.tasks
         a = [tasks[i].activation for i in ramping]
         x = np.zeros_like(main.x)
+        damped_stack = self._damped_stack
         for mask in range(1 << len(ramping)):
             weight = math.prod(a[j] if mask >> j & 1 else 1.0 - a[j] for j in range(len(a)))
             if mask == (1 << len(ramping)) - 1:
@@ -238,12 +192,14 @@ class _StackScheme:
                 continue
             out = tuple(sorted(excluded + tuple(i for j, i in enumerate(ramping)
                                                  if not mask >> j & 1)))
-            if self._late(start):
-                return None
-            other, _, _ = self._solve(out, start, ladder=False)
+            sub = self.assembler.derived(out, self.assembler.no_rows)
+            other = self.safe.solve_once(self._scheme_problem(sub), start,
+                                         self._damper(out, sub))
             if other is None:
+                self._damped_stack = damped_stack
                 return None
             x += weight * other.x
+        self._damped_stack = damped_stack
         problem = self._scheme_problem(solved)
         x, _ = clip_to_box(x, problem.lower, problem.upper)  # round-off only: the box is convex
         primary = self.safe.primary
@@ -251,8 +207,7 @@ class _StackScheme:
         result = evaluate(problem, x, Status.BLENDED, main.result.solver,
                           f"blended: activation {active}", level_tol=primary.level_tol,
                           hard_tol=primary.hard_tol, solve_time=main.result.solve_time)
-        return SafeSolve(x, result, main.stage, main.attempts, main.clipped, main.clip_flagged,
-                         main.deadline_missed, main.relaxed_levels, main.elapsed)
+        return dataclasses.replace(main, x=x, result=result)
 
     def _scheme_problem(self, problem: Problem) -> Problem:
         """The problem this scheme hands to the ladder for the stack's ``problem``."""

@@ -83,11 +83,11 @@ from time import perf_counter
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import nnls
 
 from .._validation import FloatArray
 from .backends.daqp_binding import DaqpBinding, open_daqp
 from .kkt import active_set
+from .linalg import nnls
 from .problem import Problem
 
 #: Verdicts of one level.
@@ -96,6 +96,7 @@ CERTIFIED = "certified"
 ILL_POSED = "ill_posed"
 IMPROVABLE = "improvable"
 UNPROVEN = "unproven"
+LATE = "late"
 
 #: default relative tolerance deciding that a level is met (the registry's ``level_tol``)
 LEVEL_TOL = 1e-6
@@ -125,7 +126,8 @@ class LevelCertificate(NamedTuple):
     Attributes:
         level: Level index (0 = highest priority).
         verdict: One of ``met``, ``certified``, ``ill_posed``, ``improvable``, ``unproven``
-            (module docstring).
+            (module docstring), or ``late`` (the solve's end passed before the level was
+            examined: not proven).
         residual: ``rho_k(x)``, the weighted violation norm at x.
         stationarity: Largest ``|r_j|`` left after the multipliers (0 when met).
         gap: Upper bound on ``rho_k(x) - rho_k*`` with the freeze allowance (``inf`` when
@@ -193,6 +195,8 @@ class Certificate(NamedTuple):
                     f"optimum by more than the tolerance (gap bound {c.gap:.2e})")
         if c.verdict == IMPROVABLE:
             return f"level {k} is not optimal (improvable by {c.improvement:.2e})"
+        if c.verdict == LATE:
+            return f"level {k} is not proven optimal: the deadline passed before it was examined"
         return f"level {k} is not proven optimal (gap bound {c.gap:.2e})"
 
 
@@ -416,6 +420,9 @@ class Certifier:
     Attributes:
         open_binding: Makes the DAQP binding of each workspace (default
             :func:`~uvms_qp.hqp.backends.daqp_binding.open_daqp`).
+        end: Reading of ``clock`` [s] after which the levels not yet settled are left
+            ``unproven`` (a solver sets it before each solve; ``inf``: none).
+        clock: The clock of ``end``.
     """
 
     def __init__(self, level_tol: float = LEVEL_TOL, opt_tol: float = OPT_TOL,
@@ -424,6 +431,8 @@ class Certifier:
         self.level_tol, self.opt_tol, self.freeze_tol = level_tol, opt_tol, freeze_tol
         self.stat_tol, self.act_tol, self.hard_tol = stat_tol, act_tol, hard_tol
         self.open_binding: Callable[[], DaqpBinding] = open_daqp
+        self.end = math.inf
+        self.clock: Callable[[], float] = perf_counter
         self._works: dict[Problem, _Work] = {}
 
     def reset(self) -> None:
@@ -516,6 +525,11 @@ class Certifier:
         else:
             rest = list(range(len(unmet)))
         if rest:
+            if self.clock() > self.end:  # no time for the cold solves: not proven
+                for i in rest:
+                    k = unmet[i]
+                    out[k] = LevelCertificate(k, LATE, residuals[k], math.inf, math.inf)
+                return out
             self._active(problem, work, s, residuals, unmet, rest, sizes, scales, out)
         return out
 
@@ -567,7 +581,7 @@ class Certifier:
                 polars[k].keep_support()  # type: ignore[union-attr]
             elif verdict == UNPROVEN:
                 retry.append(i)
-        if not retry:
+        if not retry or self.clock() > self.end:
             return
         # the multipliers again by non-negative least squares on the same active sides (DAQP's
         # are accurate to its primal tolerance only)
@@ -608,7 +622,7 @@ def _nnls(A: FloatArray, g: FloatArray, act: np.ndarray, lam: FloatArray) -> Non
     """Signed multipliers of ``min |g + A' lambda|`` on the active sides, written into ``lam``.
 
     ``lam`` has one entry per leading row of ``A`` that may carry one (the rows above the
-    level); one :func:`scipy.optimize.nnls` on unit columns (``+a`` at an upper side, ``-a`` at
+    level); one :func:`uvms_qp.hqp.linalg.nnls` on unit columns (``+a`` at an upper side, ``-a`` at
     a lower one).
     """
     start = lam.shape[0]
@@ -622,7 +636,7 @@ def _nnls(A: FloatArray, g: FloatArray, act: np.ndarray, lam: FloatArray) -> Non
     live = norms > 0.0
     rows, norms = rows[live], norms[live]
     sign = np.where(np.arange(live.size)[live] < up.size, 1.0, -1.0)
-    coef, _ = nnls((A[rows] * (sign / norms)[:, None]).T, -g, maxiter=50 * max(rows.size, 10))
+    coef, _ = nnls((A[rows] * (sign / norms)[:, None]).T, -g, 50 * max(rows.size, 10))
     np.add.at(lam, rows, sign * coef / norms)
 
 
@@ -796,19 +810,22 @@ def _level_qp(fr: _Frozen, k: int) -> tuple[FloatArray, FloatArray, FloatArray, 
 
 
 def level_optimum(problem: Problem, x: FloatArray, k: int, deadline: float | None = None,
-                  clock: Callable[[], float] = perf_counter) -> FloatArray | None:
+                  clock: Callable[[], float] = perf_counter, best_effort: bool = False
+                  ) -> FloatArray | None:
     """Exact optimum of level k over its frozen set at ``x`` (None when the solve fails).
 
     One :func:`uvms_qp.hqp.kkt.active_set` solve started at ``x`` (feasible by construction);
     the answer is clipped into the box (the steps land on it to round-off). ``deadline`` is a
-    reading of ``clock`` [s] after which the solve gives up.
+    reading of ``clock`` [s] after which the solve gives up; with ``best_effort`` a solve that
+    stagnates or stops early returns the point it reached (in the frozen set, the level no
+    worse than at ``x``) instead of None.
     """
     fr = _Frozen(problem, np.asarray(x, dtype=np.float64))
     H, c, E, e, G, h, z0 = _level_qp(fr, k)
     # from a feasible, usually nearly optimal start: a few exchanges of the working set; the
     # cap keeps a degenerate case from grinding (it fails, and is reported unproven)
     z = active_set(H, c, E, e, G, h, z0, max_iter=3 * z0.size + 20,
-                   deadline=deadline, clock=clock)
+                   deadline=deadline, clock=clock, best_effort=best_effort)
     if z is None:
         return None
     return np.minimum(np.maximum(z[:problem.n], problem.lower), problem.upper)
@@ -877,12 +894,14 @@ def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = No
         # every unmet level from the top: a certified level is optimal to the tolerance, not
         # exactly, and the exact solves below would otherwise trade its rows within their
         # frozen bands (its value kept, its stationarity lost)
-        better = level_optimum(problem, z, k, deadline, clock)
+        better = level_optimum(problem, z, k, deadline, clock, best_effort=True)
         if better is None:
             late = deadline is not None and clock() > deadline
             return Repair(x, cert, False, f"the exact solve of level {k} "
                           + ("ran out of time" if late else "failed"))
         z = better
+        if deadline is not None and clock() > deadline:
+            return Repair(x, cert, False, f"the deadline passed in the exact solve of level {k}")
     new = certifier(problem, z)
     if new.ok:
         return Repair(z, new, True, f"repaired from level {first}")

@@ -71,8 +71,9 @@ from __future__ import annotations
 
 import math
 import weakref
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
 from scipy.linalg import lapack
@@ -145,7 +146,8 @@ def _svd(M: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
 
 
 def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
-                  dt: float = 0.0) -> Damping:
+                  dt: float = 0.0, *, end: float = math.inf,
+                  clock: Callable[[], float] = perf_counter) -> Damping | None:
     """The damping rows of every level of ``problem`` at its undamped answer ``x``.
 
     See the module docstring. The problem's metric ``W``, row weights, hard rows and sides are
@@ -160,10 +162,13 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         x: The undamped answer (n,), which fixes the active inequality rows and the demands.
         thresholds: Per level ``epsilon`` (>= 0; 0: no damping), dimensionless.
         dt: Control period [s] of the closed loop (0: no demand term in the threshold).
+        end: Reading of ``clock`` [s] after which the levels are not examined one by one.
+        clock: The clock of ``end``.
 
     Returns:
         The damping rows and the smallest singular value of each level (a lower bound on it
-        when the screen proves that no level needs damping).
+        when the screen proves that no level needs damping), or None when ``end`` passed
+        before the levels the screen could not settle were examined.
     """
     setup = _SETUPS.get(problem)
     if (setup is None or setup.W is not problem.W or setup.dt != dt
@@ -192,12 +197,18 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         return Damping(setup.nones, (*bounds, *setup.tail))
     # what each row misses, z - clip(z, lo, hi): z - lo below lo, z - hi above hi
     slack = _add(_minimum(setup.below, 0.0), _maximum(setup.above, 0.0))
-    return _examine(problem, setup, x, active, slack, hard, y_norm)
+    if clock() > end:
+        return None
+    return _examine(problem, setup, x, active, slack, hard, y_norm, end, clock)
 
 
 def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
-             slack: FloatArray, hard: FloatArray | None, y_norm: float) -> Damping:
-    """The levels examined one by one (the screen could not prove that none needs damping)."""
+             slack: FloatArray, hard: FloatArray | None, y_norm: float, end: float,
+             clock: Callable[[], float]) -> Damping | None:
+    """The levels examined one by one (the screen could not prove that none needs damping).
+
+    None when ``end`` passes before every level was examined.
+    """
     p, last, eps, dt, root = len(problem.spans), setup.last, setup.eps, setup.dt, setup.root
     A, lo, hi = setup.A, setup.sides[0], setup.sides[1]
     # the rows that ask for motion: active, with a side that excludes zero
@@ -213,6 +224,8 @@ def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
     rows: list[FloatArray | None] = [None] * p
     sigmas = [math.nan] * p
     for k, (a, b) in enumerate(setup.spans):
+        if k and clock() > end:
+            return None
         act = [i for i in range(a, b) if actives[i]]
         if not act or (Z is not None and Z.shape[1] == 0):
             sigmas[k] = math.inf

@@ -24,9 +24,9 @@ from dataclasses import dataclass
 from time import perf_counter
 
 import numpy as np
-from scipy.optimize import nnls
 
 from .._validation import FloatArray
+from .linalg import nnls
 
 #: relative feasibility tolerance of a certified point, ``G z - h <= FEAS_TOL (1 + |h|)``
 FEAS_TOL = 1e-10
@@ -77,7 +77,7 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     """Check the KKT conditions of the QP at ``z``; return the certificate or None.
 
     Multipliers are searched only on constraints tight at ``z`` (complementary slackness) and
-    kept non-negative (dual feasibility) by :func:`scipy.optimize.nnls`; ``z`` must be feasible.
+    kept non-negative (dual feasibility) by :func:`uvms_qp.hqp.linalg.nnls`; ``z`` must be feasible.
     """
     n = z.size
     if not feasible(G, h, lb, ub, z):
@@ -98,7 +98,7 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     blocks.append(-eye[tight_l])
     C = np.vstack(blocks)
     if C.shape[0]:
-        nu, _ = nnls(C.T, -g, maxiter=50 * max(C.shape))
+        nu, _ = nnls(C.T, -g, 50 * max(C.shape))
         r = g + C.T @ nu
         reach = float(np.abs(C.T @ nu).max())
     else:
@@ -136,7 +136,8 @@ def kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray, rcond:
 
 def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
                     lb: FloatArray | None, ub: FloatArray | None, z: FloatArray,
-                    tols: tuple[float, ...] = ACTIVE_TOLS) -> Certificate | None:
+                    tols: tuple[float, ...] = ACTIVE_TOLS, *, deadline: float | None = None,
+                    clock: Callable[[], float] = perf_counter) -> Certificate | None:
     """Sharpen an inexact answer on candidate active sets and certify it.
 
     For each activity threshold ``tau`` the constraints within ``tau`` (relative) of being
@@ -146,7 +147,8 @@ def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
     :func:`certify` is returned; the raw ``z`` itself is tried first.
 
     Returns:
-        The certificate of the sharpened optimum, or None when no candidate can be certified.
+        The certificate of the sharpened optimum, or None when no candidate can be certified
+        (or ``deadline``, a reading of ``clock`` [s], passes first).
     """
     cert = certify(P, q, G, h, lb, ub, z)
     if cert is not None:
@@ -166,6 +168,8 @@ def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
     for tau in tols:
         work = finite & (slack <= tau * rel)
         for _ in range(6):
+            if deadline is not None and clock() > deadline:
+                return None
             key = work.tobytes()
             if key in tried:
                 break
@@ -189,8 +193,8 @@ def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
 def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: FloatArray,
                h: FloatArray, z0: FloatArray, *, max_iter: int | None = None,
                tight: float = TIGHT_TOL, start_tol: float = 1e-7, rcond: float = 1e-13,
-               deadline: float | None = None, clock: Callable[[], float] = perf_counter
-               ) -> FloatArray | None:
+               deadline: float | None = None, clock: Callable[[], float] = perf_counter,
+               best_effort: bool = False) -> FloatArray | None:
     """Primal active-set solve of ``min 1/2 z'Hz + c'z  s.t.  E z = e, G z <= h`` from ``z0``.
 
     The textbook method (Nocedal & Wright, *Numerical Optimization*, 2nd ed., Alg. 16.3) from
@@ -217,10 +221,14 @@ def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: Fl
         rcond: Cut-off of the KKT least squares (:func:`kkt_point`).
         deadline: Reading of ``clock`` [s] after which the solve gives up (None: none).
         clock: The clock of ``deadline`` (default :func:`time.perf_counter`).
+        best_effort: Stop when the solve stagnates (``m + 10`` iterations in a row without
+            lowering the objective), and when it stops early (stagnation, the iteration cap,
+            the deadline) return the point it has (feasible, its objective at most the
+            start's) instead of None.
 
     Returns:
         The stationary point with non-negative multipliers, or None (infeasible start, no
-        progress, iteration cap, deadline).
+        minimiser, or an early stop without ``best_effort``).
     """
     m = z0.size
     rel = 1.0 + np.abs(h)
@@ -232,9 +240,19 @@ def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: Fl
     seen = {work.tobytes()}
     pe = E.shape[0]
     landed = False  # the last step was a full one: z is the optimum on its working set
+    best = _objective(H, c, z) if best_effort else 0.0
+    stall, patience = 0, m + 10
     for _ in range(max_iter or 10 * (m + G.shape[0]) + 50):
         if deadline is not None and clock() > deadline:
-            return None
+            return z if best_effort else None
+        if best_effort:
+            value = _objective(H, c, z)
+            if value < best - 1e-15 * max(1.0, abs(best)):
+                best, stall = value, 0
+            else:
+                stall += 1
+                if stall > patience:  # no progress: degenerate exchanges only
+                    return z
         C = np.vstack((E, G[work]))
         grad = H @ z + c
         d = np.concatenate((e - E @ z, h[work] - G[work] @ z))
@@ -286,7 +304,12 @@ def active_set(H: FloatArray, c: FloatArray, E: FloatArray, e: FloatArray, G: Fl
             work = work.copy()
             work[hit] = True
             seen.add(work.tobytes())
-    return None
+    return z if best_effort else None
+
+
+def _objective(H: FloatArray, c: FloatArray, z: FloatArray) -> float:
+    """``1/2 z'Hz + c'z``."""
+    return float(z.dot(0.5 * H.dot(z) + c))
 
 
 def _unsolved(H: FloatArray, C: FloatArray, grad: FloatArray, d: FloatArray, p: FloatArray,

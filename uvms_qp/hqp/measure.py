@@ -14,10 +14,11 @@ each level's weighted ``r_k^2 = sum_i w_i s_i^2``. The decision:
 * a claimed success whose hard violation exceeds ``hard_tol * max(1, max |finite hard side|)``:
   ``backend_error`` (the message names the bound or row);
 * otherwise ``optimal`` when every ``r_k <= level_tol * max(1, max |finite side of level k|)``,
-  else ``level_infeasible`` at the first unmet level, once the optimality certificate (a
-  solver's :class:`uvms_qp.hqp.certificate.Certifier`, asked about every answer with an unmet
-  level) has proven every unmet level optimal; a level it cannot prove makes the answer
-  ``unproven`` (feasible, not proven optimal; the certificate is kept in the result).
+  and, when some are not, still ``optimal`` (with those levels in ``unmet_levels``) once the
+  optimality certificate (a solver's :class:`uvms_qp.hqp.certificate.Certifier`, asked about
+  every answer with an unmet level) has proven every unmet level optimal; a level it cannot
+  prove makes the answer ``unproven`` (feasible, not proven optimal; the certificate is kept
+  in the result).
 
 :func:`hard_violation` is the one measure of "how far is x outside the hard set" on plain arrays,
 for callers that hold the box and rows themselves (simulation logs, benchmarks).
@@ -44,7 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover - the certificate is handed in by the solv
 #: measurement's slacks, level residuals and hard violation.
 Certify = Callable[[Problem, FloatArray, FloatArray, list[float], float], "Certificate"]
 
-_OPTIMAL, _LEVEL_INFEASIBLE = Status.OPTIMAL, Status.LEVEL_INFEASIBLE
+_OPTIMAL = Status.OPTIMAL
 _SQRT = math.sqrt
 _INF = math.inf
 _minimum, _subtract, _multiply = np.minimum, np.subtract, np.multiply
@@ -138,8 +139,8 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
     Args:
         problem: The problem ``x`` answers.
         x: The back-end's answer (anything: None, a wrong length and NaN are reported).
-        claim: The back-end's own verdict; ``optimal`` or ``level_infeasible`` claim success
-            (the measurement decides which), any other status is kept.
+        claim: The back-end's own verdict; ``optimal`` claims success (the measurement and the
+            certificate decide), any other status is kept.
         solver: Back-end name for the report.
         message: Back-end detail to keep.
         info: Back-end extras.
@@ -182,8 +183,9 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
     else:
         residuals = [_INF if v != v else _SQRT(v) for v in squares[1:]]
     status, infeasible = claim, None
+    unmet: tuple[int, ...] = ()
     cert: Certificate | None = None
-    if claim is _OPTIMAL or claim is _LEVEL_INFEASIBLE:
+    if claim is _OPTIMAL:
         if hv > hard_tol and hv > hard_tol * problem.hard_scale:
             status = Status.BACKEND_ERROR
             message = (message + "; " if message else "") + (
@@ -193,14 +195,14 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             message = (message + "; " if message else "") + "non-finite level residual"
         else:
             status = _OPTIMAL
-            for k, r in enumerate(residuals):
-                if r > level_tol and r > level_tol * problem.level_scale(k):
-                    infeasible, status = k, _LEVEL_INFEASIBLE
-                    break
+            unmet = tuple(k for k, r in enumerate(residuals)
+                          if r > level_tol and r > level_tol * problem.level_scale(k))
+            if unmet:
+                infeasible = unmet[0]
             if infeasible is not None and certify is not None:
                 cert = certify(problem, x, s, residuals, hv)
                 if not cert.ok:
                     status = Status.UNPROVEN
                     message = (message + "; " if message else "") + cert.reason()
     return HierarchyResult(x, status, solver, residuals, infeasible, hv, solve_time, message,
-                           info or {}, s, problem.spans, problem.box.copy(), cert)
+                           info or {}, s, problem.spans, problem.box.copy(), cert, unmet)

@@ -17,10 +17,12 @@ class Status(StrEnum):
     """Outcome of a hierarchy solve.
 
     Members:
-        OPTIMAL: every level is met (to tolerance) and the hard rows hold.
-        LEVEL_INFEASIBLE: ``x`` is the lexicographic optimum, but some level cannot be met exactly;
-            ``HierarchyResult.infeasible_level`` is the first such level. Every unmet level is
-            proven optimal by the certificate (:mod:`uvms_qp.hqp.certificate`).
+        OPTIMAL: ``x`` is the lexicographic optimum, proven: the hard rows hold and every level
+            is met (to tolerance) or, where it cannot be met, proven optimal by the certificate
+            (:mod:`uvms_qp.hqp.certificate`). Which levels are met is per level:
+            ``HierarchyResult.unmet_levels`` (empty when every level is met) and
+            ``infeasible_level`` (the first unmet one). Lower levels that a higher one leaves
+            unmet are the normal case of a priority stack, not a failure.
         UNPROVEN: ``x`` is finite and inside the hard set, but it is not proven to be the
             lexicographic optimum: the optimality certificate of an unmet level failed (an
             improving direction, an ill-posed level, or a closed form's damping);
@@ -34,24 +36,35 @@ class Status(StrEnum):
             them: those levels trade residual for bounded rates.
         BLENDED: ``x`` is a convex combination of the optima with and without tasks whose
             activation ramps between 0 and 1: the optimum of neither.
+
+    Migration: versions before this vocabulary called a proven optimum with an unmet level
+    ``level_infeasible``; ``Status("level_infeasible")`` reads it as :attr:`OPTIMAL` (e.g. a
+    ``results.json`` written then).
     """
 
     OPTIMAL = "optimal"
-    LEVEL_INFEASIBLE = "level_infeasible"
     UNPROVEN = "unproven"
     HARD_INFEASIBLE = "hard_infeasible"
     BACKEND_ERROR = "backend_error"
     DAMPED = "damped"
     BLENDED = "blended"
 
+    @classmethod
+    def _missing_(cls, value: object) -> Status | None:
+        """Old names: ``level_infeasible`` is :attr:`OPTIMAL` (with an unmet level)."""
+        return cls.OPTIMAL if value == "level_infeasible" else None
+
 
 #: How a summary reads the certificate's verdict on a level.
 _VERDICTS = {"met": "met", "certified": "NOT met, proven optimal",
              "ill_posed": "NOT met, ill-posed (not proven)", "improvable": "NOT met, improvable",
-             "unproven": "NOT met, not proven optimal"}
+             "unproven": "NOT met, not proven optimal",
+             "late": "NOT met, not proven optimal (deadline)"}
 
 #: Statuses that claim the lexicographic optimum.
-OK_STATUSES = (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+OK_STATUSES = (Status.OPTIMAL,)
+#: Old status names and the status each now reads as (``Status(old)`` applies it).
+RENAMED = {"level_infeasible": "optimal"}
 
 _ACTIVE_TOL = 1e-9
 
@@ -69,7 +82,9 @@ class HierarchyResult:
         status: Outcome, see :class:`Status`.
         solver: Name of the back-end that produced ``x``.
         level_residuals: Weighted violation norm ``sqrt(sum_i w_i s_i^2)`` per level.
-        infeasible_level: Index of the first level not met exactly, or None.
+        infeasible_level: Index of the first level not met (to tolerance), or None.
+        unmet_levels: Indices of every level not met (to tolerance), highest first (empty when
+            every level is met); with status ``optimal`` each of them is proven optimal.
         hard_violation: Largest violation of the hard box and hard rows at ``x`` (0 when they
             hold) [units of the rows].
         solve_time: Wall time of the solve [s], validation excluded.
@@ -98,6 +113,7 @@ class HierarchyResult:
         "solve_time",
         "solver",
         "status",
+        "unmet_levels",
         "x",
     )
 
@@ -106,7 +122,8 @@ class HierarchyResult:
                  hard_violation: float, solve_time: float, message: str,
                  info: dict[str, object], slacks: FloatArray,
                  spans: tuple[tuple[int, int], ...], box: FloatArray,
-                 certificate: Certificate | None = None) -> None:
+                 certificate: Certificate | None = None,
+                 unmet_levels: tuple[int, ...] | None = None) -> None:
         self.x = x
         self.status = status
         self.solver = solver
@@ -120,11 +137,13 @@ class HierarchyResult:
         self._spans = spans
         self.box = box
         self.certificate = certificate
+        self.unmet_levels = (unmet_levels if unmet_levels is not None
+                             else () if infeasible_level is None else (infeasible_level,))
         self._active: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def ok(self) -> bool:
-        """True when ``x`` is the lexicographic optimum (optimal or level_infeasible)."""
+        """True when ``x`` is the proven lexicographic optimum (status ``optimal``)."""
         return self.status in OK_STATUSES
 
     @property
@@ -171,20 +190,15 @@ class HierarchyResult:
 
     def summary(self) -> str:
         """Return a short multi-line report a person can read."""
-        lines = [
-            f"solver {self.solver}: {self.status.value}"
-            + (f" (first unmet level {self.infeasible_level})"
-               if self.infeasible_level is not None else "")
-            + f" in {self.solve_time * 1e6:.1f} us",
-        ]
+        lines = [f"solver {self.solver}: {self.status.value}{levels_note(self)}"
+                 f" in {self.solve_time * 1e6:.1f} us"]
         cert = self.certificate
         for k, (r, (a, b)) in enumerate(zip(self.level_residuals, self._spans, strict=True)):
             mark = ""
             if cert is not None:
                 mark = _VERDICTS.get(cert.levels[k].verdict, "")
             elif self.ok:
-                mark = "NOT met" if k == self.infeasible_level else (
-                    "met" if self.infeasible_level is None or k < self.infeasible_level else "")
+                mark = "NOT met" if k in self.unmet_levels else "met"
             lines.append(f"  level {k}: residual {r:.3e} ({b - a} rows) {mark}".rstrip())
         n_lo, n_hi = int(self.active_lower.sum()), int(self.active_upper.sum())
         lines.append(f"  active bounds: {n_lo} lower, {n_hi} upper; "
@@ -192,3 +206,17 @@ class HierarchyResult:
         if self.message:
             lines.append(f"  {self.message}")
         return "\n".join(lines)
+
+
+def levels_note(result: HierarchyResult) -> str:
+    """`` (every level met)`` or `` (levels 2, 3 unmet, proven optimal)`` for a status line.
+
+    Empty for a result that is not the proven optimum (its message says why).
+    """
+    if not result.ok:
+        return ""
+    unmet = result.unmet_levels
+    if not unmet:
+        return " (every level met)"
+    which = f"level {unmet[0]}" if len(unmet) == 1 else "levels " + ", ".join(map(str, unmet))
+    return f" ({which} unmet, proven optimal)"

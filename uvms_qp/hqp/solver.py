@@ -25,6 +25,7 @@ from .backends.cascade import CascadeBackend
 from .backends.daqp import DaqpBackend
 from .backends.nullspace import NullspaceBackend
 from .certificate import Certifier, repair
+from .linalg import one_blas_thread
 from .measure import Certify, clip_to_box, evaluate
 from .problem import Problem
 from .registry import SolverSpec, available_solvers, get_spec
@@ -51,12 +52,13 @@ class HierarchySolver:
             positive; None for the identity (e.g. ``[10, 10, 10, 1, 1, 1]`` moves the arm rather
             than the vehicle, Soylu et al. (2007), Eq. (17)).
         options: Back-end options. Common keys: ``level_tol`` (relative tolerance deciding that a
-            level is met, default from the registry), ``hard_tol``, ``time_cap`` (cap of one
-            solve [s] on :attr:`clock`, default none; a safe solver sets its own: a cascade
-            starts no QP after it and reports ``backend_error``, the repair gives up); DAQP
-            settings (``rho_soft``,
+            level is met, default from the registry), ``hard_tol``; DAQP settings (``rho_soft``,
             ``primal_tol``, ``time_limit``...) and ``rho_ladder``; cascade ``rank_tol``, ``reg``
             and qpsolvers settings; nullspace ``rcond``, ``atol`` and ``damping``.
+        deadline: Budget of one solve [s] on :attr:`clock` (None: none). Every part of a
+            solve takes its time from what is left: a cascade starts no QP after it, the
+            certificate leaves the levels it has not reached ``unproven``, the repair stops
+            with the best point it has; a solve past it reports what it has, truthfully.
 
     Attributes:
         backend: The back-end object (:class:`~uvms_qp.hqp.backends.Backend`).
@@ -68,8 +70,8 @@ class HierarchySolver:
             rows (a back-end that reduces them) or goes through
             :func:`~uvms_qp.hqp.certificate.repair` before it is reported ``unproven``
             (default: for back-ends that enforce the hard set; a closed form's answer is
-            reported as it is).
-        time_cap: Cap of one solve [s] on :attr:`clock` (a cascade's QPs and the repair).
+            reported as it is). A safe solver asks for it as a stage of its ladder instead.
+        deadline: Budget of one solve [s] (``inf``: none).
         saturate: Clip every claimed answer into the box before measuring it, the amount in
             ``info["clipped"]`` (for a closed form that cannot enforce the box, whose command is
             its saturated answer); False by default.
@@ -81,7 +83,8 @@ class HierarchySolver:
     """
 
     def __init__(self, solver: str = "daqp", weights: Any = None,
-                 options: dict[str, Any] | None = None) -> None:
+                 options: dict[str, Any] | None = None, *, deadline: float | None = None
+                 ) -> None:
         self.spec = get_spec(solver)
         if options is None:
             options = {}
@@ -92,15 +95,15 @@ class HierarchySolver:
                                    "options['level_tol']", positive=True)
         self.hard_tol = as_scalar(opts.pop("hard_tol", self.spec.hard_tol),
                                   "options['hard_tol']", positive=True)
-        time_cap = as_scalar(opts.pop("time_cap", math.inf), "options['time_cap']",
-                             positive=True, allow_inf=True)
         self.backend: Backend = make_backend(self.spec, opts)
-        self.time_cap = time_cap
+        self.deadline = math.inf if deadline is None else as_scalar(
+            deadline, "deadline", positive=True, allow_inf=True)
         self._name = self.spec.name
         self.certifier = Certifier(level_tol=self.level_tol, hard_tol=self.hard_tol)
         self.certify: Certify | None = self.certifier
         self.repair = self.spec.bounds
         self._clock: Callable[[], float] = perf_counter
+        self.clock = perf_counter
         self.saturate = False
         self.weights = weights
         self._validate = Validator()
@@ -111,18 +114,8 @@ class HierarchySolver:
         return self.spec.name
 
     @property
-    def time_cap(self) -> float:
-        """Cap of one solve [s] on :attr:`clock` (inf: none); the back-end reads it too."""
-        return self._time_cap
-
-    @time_cap.setter
-    def time_cap(self, value: float) -> None:
-        self._time_cap = float(value)
-        self.backend.time_cap = self._time_cap
-
-    @property
     def clock(self) -> Callable[[], float]:
-        """The clock [s] of :attr:`time_cap`; the back-end reads it too.
+        """The clock [s] of :attr:`deadline`; the back-end and the certificate read it too.
 
         :func:`time.perf_counter` by default; a safe solver sets its own (a test may fake it).
         """
@@ -132,6 +125,7 @@ class HierarchySolver:
     def clock(self, clock: Callable[[], float]) -> None:
         self._clock = clock
         self.backend.clock = clock
+        self.certifier.clock = clock
 
     @property
     def weights(self) -> Any:
@@ -194,55 +188,74 @@ class HierarchySolver:
             problem.W = self._metric_for(problem.n)  # type: ignore[assignment]
         return self.solve_problem(problem)
 
-    def solve_problem(self, problem: Problem) -> HierarchyResult:
+    def solve_problem(self, problem: Problem, end: float | None = None, *,
+                      repair: bool | None = None) -> HierarchyResult:
         """Solve a :class:`~uvms_qp.hqp.problem.Problem` (trusted: no validation).
 
         The problem's own metric ``problem.W`` is used; ``x`` is measured like any answer.
+
+        Args:
+            problem: The problem.
+            end: Reading of :attr:`clock` [s] by which the solve ends (default: now plus
+                :attr:`deadline`).
+            repair: Repair an unproven answer (:meth:`repaired`); default :attr:`repair`.
         """
-        start = _wall()
         began = self._clock()
-        answer = self.backend.solve(problem)
-        x, message, info = answer.x, answer.message, answer.info
-        if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
-            x, message, info = _saturated(problem, x, message, info)
-        result = evaluate(problem, x, answer.status, self._name, message, info, self.level_tol,
-                          self.hard_tol, _wall() - start, answer.measured, self.certify)
-        if result.status is Status.UNPROVEN and self.repair:
-            result = self._repaired(problem, result, start, began)
+        if end is None:
+            end = began + self.deadline
+        with one_blas_thread:
+            start = _wall()
+            self.backend.end = end
+            self.certifier.end = end
+            answer = self.backend.solve(problem)
+            x, message, info = answer.x, answer.message, answer.info
+            if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
+                x, message, info = _saturated(problem, x, message, info)
+            result = evaluate(problem, x, answer.status, self._name, message, info,
+                              self.level_tol, self.hard_tol, _wall() - start, answer.measured,
+                              self.certify)
+            if result.status is Status.UNPROVEN and (self.repair if repair is None else repair):
+                result = self.repaired(problem, result, end, start)
         return result
 
-    def _repaired(self, problem: Problem, result: HierarchyResult, start: float, began: float
-                  ) -> HierarchyResult:
+    def repaired(self, problem: Problem, result: HierarchyResult, end: float,
+                 start: float | None = None) -> HierarchyResult:
         """An unproven answer made proven, or as it was with what was tried in its message.
 
         First the back-end again on the problem without its degenerate rows (when it reduces
         them: DAQP), then :func:`~uvms_qp.hqp.certificate.repair` from the better of the two
-        answers. An ill-posed level is left as it is: its exact optimum is the answer already.
+        answers, both by ``end`` (a reading of :attr:`clock`). An ill-posed level is left as it
+        is: its exact optimum is the answer already.
         """
+        if start is None:
+            start = _wall()
         cert = result.certificate
         if cert is None or cert.ok or cert.ill_posed:
             return result
-        if self.backend.reduce(problem):
-            answer = self.backend.solve(problem)
-            again = evaluate(problem, answer.x, answer.status, self._name, answer.message,
-                             {**answer.info, "reduced": True}, self.level_tol, self.hard_tol,
-                             _wall() - start, answer.measured, self.certify)
-            if again.status is not Status.UNPROVEN:
-                if again.ok:
-                    return again
-                return _noted(result, "degenerate rows reduced: " + again.status.value, start)
-            result = again
-            cert = again.certificate
-            if cert is None or cert.ill_posed:
-                return result
-        fixed = repair(problem, result.x, cert, certifier=self.certifier,
-                       deadline=began + self._time_cap, clock=self._clock)
-        if not fixed.repaired and fixed.x is result.x:
-            return _noted(result, f"repair: {fixed.message}", start)
-        info = {**result.info, "repaired_from_level": cert.first_failure}
-        message = "; ".join(m for m in (result.message, fixed.message) if m)
-        return evaluate(problem, fixed.x, Status.OPTIMAL, self._name, message, info,
-                        self.level_tol, self.hard_tol, _wall() - start, None, self.certify)
+        with one_blas_thread:
+            self.backend.end = self.certifier.end = end
+            if self.backend.reduce(problem):
+                answer = self.backend.solve(problem)
+                again = evaluate(problem, answer.x, answer.status, self._name, answer.message,
+                                 {**answer.info, "reduced": True}, self.level_tol,
+                                 self.hard_tol, _wall() - start, answer.measured, self.certify)
+                if again.status is not Status.UNPROVEN:
+                    if again.ok:
+                        return again
+                    return _noted(result, "degenerate rows reduced: " + again.status.value,
+                                  start)
+                result = again
+                cert = again.certificate
+                if cert is None or cert.ill_posed:
+                    return result
+            fixed = repair(problem, result.x, cert, certifier=self.certifier, deadline=end,
+                           clock=self._clock)
+            if not fixed.repaired and fixed.x is result.x:
+                return _noted(result, f"repair: {fixed.message}", start)
+            info = {**result.info, "repaired_from_level": cert.first_failure}
+            message = "; ".join(m for m in (result.message, fixed.message) if m)
+            return evaluate(problem, fixed.x, Status.OPTIMAL, self._name, message, info,
+                            self.level_tol, self.hard_tol, _wall() - start, None, self.certify)
 
 
 def _noted(result: HierarchyResult, note: str, start: float) -> HierarchyResult:
@@ -272,11 +285,13 @@ def solve_hierarchy(
     *,
     hard: Sequence[Any] | None = None,
     options: dict[str, Any] | None = None,
+    deadline: float | None = None,
 ) -> HierarchyResult:
     """Solve a lexicographic problem once (see :class:`HierarchySolver` for the arguments).
 
     Repeated calls with the same ``solver`` and no ``options`` reuse one cached
     :class:`HierarchySolver` (its buffers and warm start), so a loop of calls stays cheap.
+    ``deadline`` [s] bounds this call (None: none).
     """
     if not isinstance(solver, str):
         raise InputError(f"solver: expected a solver name (one of {available_solvers()}), "
@@ -286,8 +301,11 @@ def solve_hierarchy(
         if cached is None:
             cached = _CACHE[solver] = HierarchySolver(solver)
         cached.weights = weights
+        cached.deadline = math.inf if deadline is None else as_scalar(
+            deadline, "deadline", positive=True, allow_inf=True)
         return cached.solve(levels, lower, upper, hard)
-    return HierarchySolver(solver, weights, options).solve(levels, lower, upper, hard)
+    return HierarchySolver(solver, weights, options, deadline=deadline).solve(
+        levels, lower, upper, hard)
 
 
 _CACHE: dict[str, HierarchySolver] = {}

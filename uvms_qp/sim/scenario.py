@@ -232,7 +232,7 @@ class Scenario:
             self.model, self.build_stack() if stack is None else stack,
             solver=solver or self.solver, dt=self.dt, metric=self.metric, strict=self.strict,
             deadline=self.deadline,
-            **({} if self.damping is None else {"damping": self.damping}),
+            **({} if self.damping is None else {"damping": float(self.damping)}),  # type: ignore[arg-type]
         )
 
     def make_plant(self, sensors: MeasurementChannel | None = None) -> Plant:

@@ -143,13 +143,13 @@ class FaultyBackend:
         self.spec = inner.spec
 
     @property
-    def time_cap(self) -> float:
-        """The wrapped back-end's cap of one solve [s]."""
-        return float(self.inner.time_cap)
+    def end(self) -> float:
+        """The wrapped back-end's end of the current solve [s on its clock]."""
+        return float(self.inner.end)
 
-    @time_cap.setter
-    def time_cap(self, value: float) -> None:
-        self.inner.time_cap = value
+    @end.setter
+    def end(self, value: float) -> None:
+        self.inner.end = value
 
     @property
     def clock(self) -> Callable[[], float]:

@@ -7,8 +7,9 @@ For every problem of every family (:mod:`uvms_qp.bench.problems`) and every inst
 (as a user gets it: :class:`~uvms_qp.hqp.HierarchySolver` with its defaults, i.e. the
 optimality certificate asked and the repair on; ``--uncertified`` switches both off, which is how
 the library answered before the certificate was on by default; ``--time-cap`` gives every solve
-the cap a controller's safe solver sets), an answer with an ok status
-(``optimal`` or ``level_infeasible``) is judged by the oracle; it is *certified-wrong* when a
+a deadline [s]), an answer with an ok status
+(``optimal``; ``level_infeasible`` in older versions) is judged by the oracle; it is
+*certified-wrong* when a
 verified point of some level's frozen set improves that level by more than 1e-6 (relative to the
 level's scale). Prints one line per (family, solver): wrong / unproven / ok / problems, the other
 statuses, the worst improvement, the slowest solve and the largest ``|x|`` of an ok answer.
@@ -41,7 +42,7 @@ def run_one(args):
     for solver in solvers:
         if solver == "nullspace" and not eq_only:
             continue
-        hs = HierarchySolver(solver, options=None if time_cap is None else {"time_cap": time_cap})
+        hs = HierarchySolver(solver, deadline=time_cap)
         if uncertified:
             hs.certify, hs.repair = None, False
         t0 = time.perf_counter()

@@ -32,7 +32,7 @@ def test_priority_and_bounds_hand_checked(name):
     A1 = np.array([[1.0, 1.0, 0.0]])
     result = solve_hierarchy([[(A1, [1.0])], [(np.eye(3), [5.0, 5.0, 5.0])]],
                              lower=[-1.0] * 3, upper=[1.0] * 3, solver=name)
-    assert result.status is Status.LEVEL_INFEASIBLE and result.ok
+    assert result.status is Status.OPTIMAL and result.ok and result.unmet_levels
     assert result.infeasible_level == 1
     assert np.allclose(result.x, [0.5, 0.5, 1.0], atol=1e-6)
     assert result.active_upper.tolist() == [False, False, True]
@@ -88,7 +88,8 @@ def test_rank_deficient_and_conflicting_levels(name):
     A1 = np.array([[1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])  # rank 1, consistent
     A2 = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # first row conflicts with level 1
     result = solve_hierarchy([[(A1, [1.0, 2.0])], [(A2, [3.0, 2.0])]], solver=name)
-    assert result.status is Status.LEVEL_INFEASIBLE and result.infeasible_level == 1
+    assert result.status is Status.OPTIMAL and result.infeasible_level == 1
+    assert result.unmet_levels[0] == 1
     assert result.x == pytest.approx([1.0, 2.0, 0.0], abs=1e-6)
     assert result.level_residuals[1] == pytest.approx(2.0, abs=1e-6)
 
@@ -101,7 +102,7 @@ def test_algorithmic_singularity_gives_finite_answer(name):
     A2 = np.array([[1.0, eps]])
     result = solve_hierarchy([[(A1, [0.0])], [(A2, [1.0])]], solver=name)
     assert np.all(np.isfinite(result.x))
-    assert result.status in (Status.OPTIMAL, Status.LEVEL_INFEASIBLE)
+    assert result.status is Status.OPTIMAL
     assert abs(result.x[0]) < 1e-6  # the first level is never traded for the second
 
 
@@ -283,6 +284,6 @@ def test_an_answer_of_the_wrong_length_from_a_back_end_is_a_failed_qp():
     result = solve_hierarchy(levels, -np.ones(3), np.ones(3), solver="cascade:highs")
     assert np.all(np.isfinite(result.x)) and np.all(np.abs(result.x) <= 1.0)
     # (unproven: rows of 1e10 beside rows of 1, which the certificate may not prove at 1e-6)
-    assert result.status in (Status.LEVEL_INFEASIBLE, Status.BACKEND_ERROR, Status.UNPROVEN)
-    if result.status == Status.LEVEL_INFEASIBLE:  # then the first level is met: x0 = 1e-10 (1 - x1)
+    assert result.status in (Status.OPTIMAL, Status.BACKEND_ERROR, Status.UNPROVEN)
+    if result.status == Status.OPTIMAL:  # then the first level is met: x0 = 1e-10 (1 - x1)
         assert abs(1e10 * result.x[0] + result.x[1] - 1.0) <= 1e-6

@@ -9,6 +9,7 @@ slab, computed here from the rows themselves.
 import numpy as np
 import pytest
 
+from uvms_qp.hqp import HierarchySolver
 from uvms_qp.hqp.kkt import active_set_from, certified_point, certify
 
 
@@ -140,10 +141,11 @@ def test_cascade_rescues_every_failed_qp_exactly():
     assert result.level_residuals == pytest.approx(reference.level_residuals, abs=1e-9)
 
 
-def test_cascade_obeys_a_deadline_guard():
-    """A TimeoutError (the safety layer's deadline guard) stops the cascade without a rescue."""
+def test_cascade_stops_at_its_end_without_a_rescue():
+    """A cascade whose solve has ended starts no QP and no rescue: it says where it stopped."""
     rng = np.random.default_rng(7)
     levels = [[(rng.standard_normal((2, 4)), rng.standard_normal(2))]]
-    result = _failing_solver(TimeoutError("deadline")).solve(levels, -np.ones(4), np.ones(4))
-    assert not result.ok and "level 0" in result.message
+    solver = HierarchySolver("cascade:quadprog", deadline=1e-9)
+    result = solver.solve(levels, -np.ones(4), np.ones(4))
+    assert not result.ok and "level 0" in result.message and "deadline" in result.message
     assert np.all(np.isfinite(result.x))

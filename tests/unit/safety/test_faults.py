@@ -11,6 +11,8 @@ failure leaves no trace in later steps (warm starts and fallback memory are not 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -54,7 +56,7 @@ def reference():
 
 
 def replay(qs, fault, *, start=K, count=1, armed=False, everything=False, strict=False,
-           deadline=None, sleep=0.05, times=None, at="backend"):
+           deadline=math.inf, sleep=0.05, times=None, at="backend"):
     """Step a fresh demo controller along ``qs``; from step ``start`` the next ``count`` back-end
     calls fail (or, with ``armed``, every call during steps start..start+count-1 fails).
     ``everything`` faults the alternate back-end as well; ``at="binding"`` faults DAQP's C

@@ -144,11 +144,11 @@ def test_run_and_compare_tables_show_stage_and_status_counts():
     """The counts were in results.json only: the run summary and the comparison say them too."""
     metrics = {"bound_violation_max": 0.0,
                "stage_counts": {"primary": 598, "alternate": 2},
-               "status_counts": {"optimal": 590, "level_infeasible": 10}}
+               "status_counts": {"optimal": 590, "unproven": 10}}
     summary = run_summary(metrics).splitlines()
     assert "  stage_counts                 primary 598, alternate 2" in summary
-    assert "  status_counts                optimal 590, level_infeasible 10" in summary
+    assert "  status_counts                optimal 590, unproven 10" in summary
     comparison = Comparison("s", "d", [SchemeRun("hqp", result=None, metrics=metrics)])  # type: ignore[arg-type]
     markdown = comparison.markdown()
     assert "| stage_counts | steps | primary 598, alternate 2 |" in markdown
-    assert "| status_counts | steps | optimal 590, level_infeasible 10 |" in markdown
+    assert "| status_counts | steps | optimal 590, unproven 10 |" in markdown

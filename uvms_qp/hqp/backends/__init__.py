@@ -34,7 +34,7 @@ class Answer:
     Attributes:
         x: Solution, or None on failure (never trusted: measured afterwards).
         status: The back-end's verdict (``optimal`` means "claims success": the measurement
-            decides between optimal and level_infeasible).
+            and the certificate decide).
         message: Detail for the user.
         info: Back-end extras (exit flags, DAQP's own timing...).
         measured: :func:`~uvms_qp.hqp.measure.measure` of ``x``, when the back-end measured it
@@ -53,13 +53,14 @@ class Backend(Protocol):
 
     Attributes:
         spec: Its registry entry.
-        time_cap: Cap of one solve [s] on ``clock`` (set by the solver; a back-end whose solves
-            can run long stops at it and reports ``backend_error``).
-        clock: The clock of ``time_cap`` [s] (the solver's; a safe solver's may be a test's).
+        end: Reading of ``clock`` [s] by which the current solve ends (set by the solver before
+            each solve; ``inf``: none). A back-end whose solves can run long stops there and
+            reports ``backend_error``.
+        clock: The clock of ``end`` [s] (the solver's; a safe solver's may be a test's).
     """
 
     spec: SolverSpec
-    time_cap: float
+    end: float
     clock: Callable[[], float]
 
     def solve(self, problem: Problem) -> Answer:

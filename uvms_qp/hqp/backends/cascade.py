@@ -33,10 +33,10 @@ Degenerate data, by design:
   row whose norm is below ``ZTOL`` of the problem's largest (a zero or tiny row); the rank of
   the rows frozen into ``Z`` is decided against their unprojected norms, so round-off left by a
   projection never becomes a direction;
-* a cap per solve (``time_cap`` [s], 50 ms by default, on ``clock``: the solver's, which a safe
-  solver sets to its own; back-ends with a time limit of their own get the time left): a QP is
-  not started after it, and the solve reports ``backend_error`` ("stopped at the time cap") for
-  the ladder to fall back.
+* the end of the solve (``end``, a reading of ``clock``: the solver's, which a safe solver sets
+  to its own; back-ends with a time limit of their own get the time left): a QP is not started
+  after it, the exact rescue and the sharpening stop there, and the solve reports
+  ``backend_error`` ("stopped at the deadline") for the ladder to fall back.
 """
 
 from __future__ import annotations
@@ -193,16 +193,16 @@ class CascadeBackend:
         self.mult_tol = as_scalar(opts.pop("mult_tol", 1e-7), "options['mult_tol']",
                                   positive=True)
         _check_settings(spec, opts)
-        #: cap of one solve [s] on ``clock`` (set by the solver from its ``time_cap`` option)
-        self.time_cap = math.inf
+        #: reading of ``clock`` [s] by which the current solve ends (set by the solver)
+        self.end = math.inf
         #: the clock of the cap [s] (the solver's; a safe solver's may be a test's)
         self.clock: Callable[[], float] = perf_counter
         #: QPs answered by the exact active-set rescue since construction (diagnostics)
         self.rescued = 0
-        self._stopped = False  # a QP raised TimeoutError in this solve (deadline guard)
+        self._stopped = False  # this solve passed its end: no QP and no rescue after it
         self._capped = False  # the last QP stopped at its iteration cap
-        self._end = math.inf  # reading of ``clock`` at which this solve's time cap falls
-        self._timed_out = False  # this solve reached its time cap
+        self._end = math.inf  # reading of ``clock`` at which this solve ends
+        self._timed_out = False  # this solve reached its end
         self._big = 0.0  # the largest level row norm of this solve's problem
         self.settings = {**spec.settings, **opts}
         if spec.qp_name == "highs":
@@ -223,7 +223,7 @@ class CascadeBackend:
         """
         none = np.zeros((0, rows.n))
         left = self._end - self.clock()
-        if left <= 0.0:  # the time cap: no QP is started after it
+        if left <= 0.0:  # the end of the solve: no QP is started after it
             self._stopped = self._timed_out = True
             return None, none
         G, h = rows.arrays()
@@ -250,9 +250,6 @@ class CascadeBackend:
                 warnings.simplefilter("ignore")
                 sol = self._qpsolvers.solve_problem(problem, solver=self.spec.qp_name,
                                                     **{**self.settings, **(extra or {})})
-        except TimeoutError:  # a deadline guard refused the QP: stop, no rescue either
-            self._stopped = True
-            return None, none
         except Exception:  # a back-end crash is a failed level, reported truthfully
             return None, none
         self._capped = not sol.found and _hit_iteration_cap(sol)
@@ -271,7 +268,7 @@ class CascadeBackend:
         if self.spec.certify or rescue:
             # never trust the back-end (or rescue an answer it gave up on, e.g. a thin feasible
             # set called infeasible): sharpen on its active set and prove the KKT conditions
-            cert = certified_point(P, q, G, h, lb, ub, z)
+            cert = certified_point(P, q, G, h, lb, ub, z, deadline=self._end, clock=self.clock)
             if cert is None:
                 return None, none
             z, lam, lam_b, mult_tol = cert.z, cert.lam, cert.lam_box, self.mult_tol
@@ -307,11 +304,11 @@ class CascadeBackend:
         """Exact active-set solve from the feasible point ``z0`` when every attempt failed.
 
         ``z0`` keeps the previous level's answer (``y = 0``, feasible by construction); the
-        answer counts only with a KKT certificate (:mod:`~uvms_qp.hqp.backends.certify`).
-        A :class:`TimeoutError` from the QP layer in this solve (a deadline guard) disables the
-        rescue, so that a guard that stops work is obeyed.
+        answer counts only with a KKT certificate (:mod:`~uvms_qp.hqp.kkt`). A solve past its
+        end does not rescue.
         """
-        if self._stopped:
+        if self._stopped or self.clock() > self._end:
+            self._stopped = self._timed_out = True
             return None, np.zeros((0, rows.n))
         G, h = rows.arrays()
         cert = active_set_from(P, q, G, h, lb, ub, z0, deadline=self._end, clock=self.clock)
@@ -369,7 +366,7 @@ class CascadeBackend:
         n = problem.n
         rescued = self.rescued
         self._stopped = self._timed_out = False
-        self._end = self.clock() + self.time_cap
+        self._end = self.end
         self._big = float(_row_norms(problem.A[problem.head:]).max(initial=0.0))
         xp = np.zeros(n)
         Z = np.eye(n)
@@ -487,7 +484,8 @@ class CascadeBackend:
             if z is not None and rho > 0.0:
                 # the regularised answer's active set, solved exactly on the QP itself
                 G, h = rows.arrays()
-                cert = certified_point(P, q, G, h, lb, ub, z)
+                cert = certified_point(P, q, G, h, lb, ub, z, deadline=self._end,
+                                       clock=self.clock)
                 if cert is not None:
                     z = cert.z
                     active = self._strong(rows, G, h, lb, ub, z, cert.lam, cert.lam_box,
@@ -545,9 +543,8 @@ class CascadeBackend:
         where = f"level {k}" if k < len(problem.sizes) else "the final regularisation"
         if self._timed_out:
             return Answer(x, Status.BACKEND_ERROR,
-                          f"{self.spec.name}: stopped at the time cap of "
-                          f"{self.time_cap * 1e3:.0f} ms in {where}; x solves levels < {k} only",
-                          {"time_capped": True})
+                          f"{self.spec.name}: stopped at the deadline in {where}; x solves "
+                          f"levels < {k} only", {"deadline_passed": True})
         suspect = k == 0 or not np.all(np.isfinite(x)) or not self._feasible(problem, x)
         if suspect and not hard_feasible(problem):
             return Answer(x, Status.HARD_INFEASIBLE, "the hard box and hard rows admit no point")

@@ -54,7 +54,7 @@ from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
 from . import Answer
-from .daqp_binding import DaqpBinding, open_daqp
+from .daqp_binding import DaqpBinding, native_available, open_daqp
 
 #: DAQP settings a caller may set (the keys of ``daqp.Model.settings``).
 DAQP_SETTINGS = frozenset((
@@ -235,8 +235,9 @@ class DaqpBackend:
         self.settings = merged
         self.rho_soft = float(merged.get("rho_soft", 1e-8))
         self.open_binding: Callable[[], DaqpBinding] = open_daqp
+        native_available()  # the binding's one-time check, now rather than in a first solve
         self._ladder = (self.rho_soft, *[r for r in self.rho_ladder if r != self.rho_soft])
-        self.time_cap = math.inf  # DAQP's own ``time_limit`` setting bounds its solves
+        self.end = math.inf  # the solve's end: DAQP's own ``time_limit`` is cut to it
         self.clock: Callable[[], float] = perf_counter
         self._setups: dict[Problem, _Setup] = {}
         self._last: tuple[Problem | None, _Setup | None] = (None, None)
@@ -340,6 +341,9 @@ class DaqpBackend:
         raw: Any = None
         for i, rho in enumerate(self._ladder):
             if i:
+                if self.clock() > self.end:
+                    flag = -7  # the solve's end passed: no further rho_soft
+                    break
                 setup.cold(rho)
             flag = binding.solve()
             raw = binding.x

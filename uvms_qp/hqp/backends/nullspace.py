@@ -145,7 +145,7 @@ class NullspaceBackend:
         self.atol = as_scalar(options.get("atol", 0.0), "options['atol']", nonnegative=True)
         self.damping = as_scalar(options.get("damping", DAMPING), "options['damping']",
                                  nonnegative=True)
-        self.time_cap = math.inf  # a closed form: nothing to cap
+        self.end = math.inf  # a closed form: nothing to stop
         self.clock: Callable[[], float] = perf_counter
 
     def reset(self) -> None:

@@ -1,0 +1,149 @@
+"""Step time against the deadline: p50, p99, p99.9 and max, idle and with both cores busy.
+
+Two workloads, each under a deadline:
+
+* ``demo``: the controller on the demo stack (BlueROV2 Heavy + Reach Alpha 5, 4 levels), closed
+  loop along a moving tool target, deadline = its control period (the default) and a tight one;
+* ``random n=30``: a safe solver (DAQP, the ladder, certificate and repair) on random
+  hierarchies of 30 variables from the benchmark's generator (wide, tight and saturated boxes),
+  and on the degenerate families of ``uvms_qp.bench.problems``.
+
+"Busy" runs the same loops while two other processes keep both cores busy with numpy matrix
+products (their BLAS threads compete with ours). Printed per workload: the deadline, the step
+time percentiles [ms], the largest overrun of the deadline [ms] and the number of steps more than
+1 ms past it, with the statuses seen.
+
+Run: ``python benchmarks/bench_deadline.py [--steps 3000] [--problems 300] [--busy-only]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import time
+from collections import Counter
+from typing import Any
+
+import numpy as np
+
+from uvms_qp.bench.problems import MATRIX_FAMILIES, base_problem, family
+from uvms_qp.bench.stacks import demo_stack
+from uvms_qp.controller import Controller
+from uvms_qp.hqp import normalize_problem
+from uvms_qp.model import load_model
+from uvms_qp.safety import SafeSolver
+
+
+def _burn(stop: mp.Event) -> None:  # type: ignore[valid-type]
+    a = np.random.default_rng(0).standard_normal((300, 300))
+    while not stop.is_set():  # type: ignore[attr-defined]
+        a = np.tanh(a @ a.T / 300.0)
+
+
+class Busy:
+    """Two processes keeping both cores busy with BLAS work while the context is open."""
+
+    def __init__(self, on: bool) -> None:
+        self.on = on
+        self.stop = mp.Event()
+        self.procs: list[mp.Process] = []
+
+    def __enter__(self) -> Busy:
+        if self.on:
+            self.procs = [mp.Process(target=_burn, args=(self.stop,)) for _ in range(2)]
+            for p in self.procs:
+                p.start()
+            time.sleep(1.0)
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.stop.set()
+        for p in self.procs:
+            p.join()
+
+
+class Circle:
+    """A tool target moving on a circle around ``center`` [m]."""
+
+    def __init__(self, center: np.ndarray, radius: float = 0.15, period: float = 8.0) -> None:
+        self.center, self.radius, self.omega = center, radius, 2.0 * np.pi / period
+
+    def sample(self, t: float) -> Any:
+        from uvms_qp.sim.trajectories import TrajectorySample
+
+        c, s = np.cos(self.omega * t), np.sin(self.omega * t)
+        p = self.center + self.radius * np.array([c - 1.0, s, 0.0])
+        v = self.radius * self.omega * np.array([-s, c, 0.0])
+        return TrajectorySample(p, v)
+
+
+def demo_steps(steps: int, deadline: float | None) -> tuple[np.ndarray, Counter[str], float]:
+    model = load_model("bluerov2_heavy_alpha5")
+    dt = 0.05
+    q = model.home()
+    stack = demo_stack(trajectory=Circle(model.frame_pose(q, "tool")[:3, 3]))
+    ctrl = Controller(model, stack, dt=dt, deadline=deadline)
+    times, statuses = [], Counter()
+    for k in range(steps):
+        t = k * dt
+        res = ctrl.step(model.state(q), t)
+        times.append(res.step_time)
+        statuses[res.status.value] += 1
+        q = model.integrate(q, res.zeta, dt)
+    return np.array(times), statuses, ctrl.safe.deadline or float("inf")
+
+
+def random_solves(count: int, deadline: float) -> tuple[np.ndarray, Counter[str]]:
+    rng = np.random.default_rng(11)
+    problems = []
+    for i in range(count):
+        box = ("wide", "tight", "saturated")[i % 3]
+        levels, lower, upper = base_problem(rng, 30, box)
+        problems.append(normalize_problem([[(A, lo, hi)] for A, lo, hi, _ in levels],
+                                          lower, upper))
+    for fam in MATRIX_FAMILIES:
+        for p in family(fam, max(1, count // 20), seed=5):
+            problems.append(normalize_problem(p.levels_rows(), p.lower, p.upper,
+                                              hard=p.hard_rows()))
+    safe = SafeSolver("daqp", deadline=deadline)
+    times, statuses = [], Counter()
+    for problem in problems:
+        t0 = time.perf_counter()
+        out = safe.solve(problem, t0)
+        times.append(time.perf_counter() - t0)
+        statuses[f"{out.stage}/{out.result.status.value}"] += 1
+    return np.array(times), statuses
+
+
+def row(name: str, deadline: float, t: np.ndarray, statuses: Counter[str]) -> str:
+    ms = t * 1e3
+    p50, p99, p999 = np.percentile(ms, [50, 99, 99.9])
+    over = ms - deadline * 1e3
+    late = int(np.sum(over > 1.0))
+    top = ", ".join(f"{k} {v}" for k, v in statuses.most_common(4))
+    return (f"| {name} | {deadline * 1e3:.1f} | {len(ms)} | {p50:.3f} | {p99:.3f} | {p999:.3f} | "
+            f"{ms.max():.3f} | {max(over.max(), 0.0):.3f} | {late} | {top} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=3000)
+    ap.add_argument("--problems", type=int, default=300)
+    ap.add_argument("--busy-only", action="store_true")
+    args = ap.parse_args()
+    print("| workload | deadline [ms] | steps | p50 [ms] | p99 [ms] | p99.9 [ms] | max [ms] | "
+          "worst overrun [ms] | > 1 ms late | stages/statuses |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for busy in ((True,) if args.busy_only else (False, True)):
+        label = "busy" if busy else "idle"
+        with Busy(busy):
+            for deadline in (None, 0.002):
+                t, st, d = demo_steps(args.steps, deadline)
+                print(row(f"demo, {label}", d, t, st), flush=True)
+            for deadline in (0.01, 0.002):
+                t, st = random_solves(args.problems, deadline)
+                print(row(f"random n=30 + families, {label}", deadline, t, st), flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,101 @@
+"""The solve path's calls into compiled linear algebra, each given only inputs it accepts.
+
+A native routine handed an input it was not written for may not raise: SciPy 1.17's
+``nnls`` frees its work memory twice on a matrix without columns and aborts the process
+(exit status 134), and returns uninitialised memory for a matrix without rows; LAPACK
+routines called directly may loop or return garbage on NaN. A controller must never take its
+host down, so every such call of the solve path goes through this module, which answers the
+degenerate shapes itself and refuses non-finite input before the native code sees it.
+``tests/unit/hqp/test_linalg.py`` holds the cases; :mod:`uvms_qp.testing.fuzz` feeds the
+certificate, the repair and the damping screen degenerate problems in child processes and
+counts aborts.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.optimize import nnls as _scipy_nnls
+
+from .._validation import FloatArray
+
+
+def nnls(A: FloatArray, b: FloatArray, maxiter: int | None = None) -> tuple[FloatArray, float]:
+    """``argmin_{c >= 0} |A c - b|`` and the residual norm, for any shape of ``A`` (m, k).
+
+    No column: ``c`` is empty and the residual ``|b|``. No row: ``c = 0``, residual 0. A
+    non-finite entry in ``A`` or ``b``: ``c = 0`` and the residual ``|b|`` (inf if ``b`` is not
+    finite), never an exception: the certificate's bound holds for any multipliers, so zero
+    multipliers are a sound (if weak) answer.
+    """
+    m, k = A.shape
+    if k == 0 or m == 0:
+        return np.zeros(k), (float(np.linalg.norm(b)) if m else 0.0)
+    if not (np.isfinite(A).all() and np.isfinite(b).all()):
+        size = float(np.linalg.norm(b))
+        return np.zeros(k), size if math.isfinite(size) else math.inf
+    c, r = _scipy_nnls(np.ascontiguousarray(A, dtype=np.float64),
+                       np.ascontiguousarray(b, dtype=np.float64),
+                       maxiter=maxiter if maxiter is not None else 50 * max(m, k, 10))
+    return c, float(r)
+
+
+def finite(*arrays: FloatArray) -> bool:
+    """True when every entry of every array is finite."""
+    return all(bool(np.isfinite(a).all()) for a in arrays)
+
+
+class OneBlasThread:
+    """A context in which the BLAS libraries of the process run one thread, restored after.
+
+    The solve path's linear algebra is small (matrices of tens of rows): a second BLAS thread
+    buys nothing there, and on a loaded machine it spin-waits for a core and stalls the call
+    (least squares on 40-120 wide systems measured 0.3 s with one thread, 3-6 s with two, for
+    the same problem). The user's other code keeps its own setting: the limit holds only inside
+    the context. The libraries are found once by ``threadpoolctl`` (on first entry, once numpy
+    and SciPy have loaded theirs); an entry then costs two C calls per library (a few
+    microseconds). Re-entering is free: the inner context finds one thread already.
+    """
+
+    def __init__(self) -> None:
+        self._libs: list[Any] | None = None
+        self._saved: list[list[tuple[Any, int]]] = []
+
+    def _find(self) -> list[Any]:
+        from threadpoolctl import ThreadpoolController
+
+        libs = [lib for lib in ThreadpoolController().lib_controllers if lib.user_api == "blas"]
+        self._libs = libs
+        return libs
+
+    def __enter__(self) -> OneBlasThread:
+        saved = []
+        for lib in self._libs if self._libs is not None else self._find():
+            count = lib.get_num_threads()
+            if count is not None and count != 1:
+                lib.set_num_threads(1)
+                saved.append((lib, count))
+        self._saved.append(saved)
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        for lib, count in self._saved.pop():
+            lib.set_num_threads(count)
+
+
+#: The one limiter of the solve path (entered by every solve and every control step).
+one_blas_thread = OneBlasThread()
+
+
+def warm_up() -> None:
+    """Pay the process's one-time costs of the solve path now, not in a first control step.
+
+    Finding the BLAS libraries (about 40 ms) and numpy's first ``unique`` (its lazily loaded
+    module, about 10 ms) would otherwise fall into the first step and eat its deadline; a safe
+    solver calls this when it is built. Idempotent.
+    """
+    if one_blas_thread._libs is None:
+        one_blas_thread._find()
+        np.unique(np.zeros(1))
