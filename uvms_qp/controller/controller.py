@@ -79,6 +79,12 @@ class Controller:
             >= 0: a level's directions whose singular value, in the freedom the higher levels
             leave, is below it get bounded rates (:mod:`uvms_qp.hqp.damping`); away from
             singularities nothing changes. 0 turns damping off.
+        coordination: Arm-vehicle coordination (Simetti et al. (2014), J. Field Robotics
+            31(3)): when a state carries the vehicle's measured body velocity
+            (``model.state(q, velocity)``, as a floating plant gives it), the joints are
+            re-solved with the vehicle's rates fixed at their measured values, so the arm
+            absorbs the vehicle's tracking error; such steps have status ``coordinated``.
+            ``hqp`` and ``weighted`` schemes; a state without a velocity is solved as usual.
 
     Raises:
         InputError: bad dt, metric or scheme; any binding error of the stack (unknown frame,
@@ -91,7 +97,7 @@ class Controller:
                  metric: Any = None, *, scheme: str = "hqp", priority_ratio: float = 1e4,
                  options: dict[str, Any] | None = None, strict: bool = False,
                  deadline: float | str | None = "period",
-                 damping: float = DEFAULT_THRESHOLD) -> None:
+                 damping: float = DEFAULT_THRESHOLD, coordination: bool = False) -> None:
         _check_arguments(model, solver, options, strict)
         if not isinstance(stack, Stack):
             raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
@@ -117,6 +123,15 @@ class Controller:
                                        priority_ratio=self.priority_ratio)
         self.solver_name = self._scheme.solver_name
         self.level_names = self.assembler.level_names
+        if not isinstance(coordination, bool | np.bool_):
+            raise InputError(f"coordination: expected True or False, got {coordination!r}")
+        if coordination and scheme == "nullspace":
+            raise InputError("coordination: the closed-form 'nullspace' scheme has no box to fix "
+                             "the vehicle's rates in; use scheme='hqp' or 'weighted'")
+        self.coordination = bool(coordination)
+        if self.coordination:
+            self._scheme.coordination = SafeSolver(self.solver_name, None, options,
+                                                   alternate=None, deadline=deadline)
 
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Compute zeta for ``state`` at time ``t`` [s].

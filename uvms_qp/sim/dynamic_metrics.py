@@ -18,8 +18,8 @@ per servo tick, and the run's states), next to the kinematic metrics of
 - ``unmet_wrench_max`` [N, N m]: the largest part of a demanded wrench the thrusters could not
   give (0 when the allocation always met the demand).
 
-A scenario phase gets ``roll_max``, ``pitch_max``, ``pitch_rms`` and, on a dynamic plant, ``energy`` (drawn
-within the window), ``power_mean`` and ``saturation_share_max`` of its window
+A scenario phase gets ``roll_max``, ``pitch_max``, ``pitch_rms`` and, on a dynamic plant,
+``energy`` (drawn within the window), ``power_mean`` and ``saturation_share_max`` of its window
 (:func:`phase_metrics`).
 """
 

@@ -221,7 +221,8 @@ class Scenario:
         """A :class:`~uvms_qp.controller.Controller` with this scenario's settings.
 
         The controller gets the scenario's ``dt``, ``metric``, ``strict``, ``deadline`` and
-        ``damping``.
+        ``damping``, and arm-vehicle coordination when the plant is dynamic and its
+        ``[plant]`` table asks for it.
 
         Args:
             solver: Override of the scenario's solver.
@@ -232,6 +233,7 @@ class Scenario:
             self.model, self.build_stack() if stack is None else stack,
             solver=solver or self.solver, dt=self.dt, metric=self.metric, strict=self.strict,
             deadline=self.deadline,
+            coordination=self.plant.kind == "dynamic" and self.plant.coordination,
             **({} if self.damping is None else {"damping": float(self.damping)}),  # type: ignore[arg-type]
         )
 
