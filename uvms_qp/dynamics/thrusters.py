@@ -54,7 +54,7 @@ _PWM_SPAN = 400.0  # [us] from stop to full thrust either way (1100-1900 us)
 #: Ouerghi, Gabrielsson, Johansen (2022), "An Open-Source Benchmark Simulator: Control of a
 #: BlueROV2 Underwater Robot", J. Mar. Sci. Eng. 10(12):1898,
 #: ``K(s) = (6136 s + 108700) / (s^3 + 89 s^2 + 9258 s + 108700)``, whose first moment is
-#: ``9258/108700 - 6136/108700 = 0.0287`` s, rounded. See ``docs/dynamics_actuators.md``.
+#: ``9258/108700 - 6136/108700 = 0.0287`` s, rounded. See ``docs/dynamics.md``.
 T200_TIME_CONSTANT = 0.03
 
 #: Electrical power fit of the T200 at 16 V, ``P = c |T|^e`` [W] with T [N]: (c, e) forward and

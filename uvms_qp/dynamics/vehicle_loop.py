@@ -34,7 +34,7 @@ from ..errors import InputError, ShapeError
 from ..model.vehicle import NU_NAMES
 
 #: Default closed-loop natural frequency of every axis [rad/s] and damping ratio (see
-#: :func:`pole_placement_gains` and ``docs/dynamics_actuators.md``).
+#: :func:`pole_placement_gains` and ``docs/dynamics.md``).
 DEFAULT_BANDWIDTH = 4.0
 DEFAULT_DAMPING_RATIO = 1.0
 
