@@ -124,7 +124,7 @@ class _RateTask(Task):
     def _bind(self, model):
         return 3
 
-    def evaluate(self, state, t):
+    def evaluate(self, state, t, slot):
         return state.jacobian("tool", "position"), self.rate, self.rate
 
 

@@ -228,8 +228,8 @@ class _StackScheme:
         ramping tasks (the continuous activation of Mansard, Khatib and Kheddar 2009, for scalar
         activations); ``x`` of the full set is ``main``. None when a solve fails.
         """
-        tasks = self.assembler.tasks
-        a = [tasks[i].activation for i in ramping]
+        tasks, slots = self.assembler.tasks, self.assembler.slots
+        a = [slots[i].activation for i in ramping]
         x = np.zeros_like(main.x)
         for mask in range(1 << len(ramping)):
             weight = math.prod(a[j] if mask >> j & 1 else 1.0 - a[j] for j in range(len(a)))
@@ -247,7 +247,7 @@ class _StackScheme:
         problem = self._scheme_problem(solved)
         x, _ = clip_to_box(x, problem.lower, problem.upper)  # round-off only: the box is convex
         primary = self.safe.primary
-        active = ", ".join(f"{tasks[i].name} {tasks[i].activation:.3g}" for i in ramping)
+        active = ", ".join(f"{tasks[i].name} {slots[i].activation:.3g}" for i in ramping)
         result = evaluate(problem, x, Status.BLENDED, main.result.solver,
                           f"blended: activation {active}", level_tol=primary.level_tol,
                           hard_tol=primary.hard_tol, solve_time=main.result.solve_time)

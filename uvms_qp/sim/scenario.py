@@ -389,7 +389,7 @@ class Scenario:
         for i, name in enumerate(self.schemes):
             if name != "hqp":
                 build_scheme(name, self, join("schemes", i), stack=stack)
-        apply_events(self.events, stack)
+        apply_events(self.events, stack, self.dt)
 
 
 # ----------------------------------------------------------------------------------------------
