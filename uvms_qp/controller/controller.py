@@ -22,7 +22,7 @@ from ..model import Model
 from ..rows import Rows
 from ..safety import SafeSolver
 from ..stack import Stack
-from ..tasks.task import Task
+from ..tasks import Task, TaskSlot
 from .assembler import StackAssembler
 from .result import StepResult
 from .schemes import SCHEMES
@@ -56,9 +56,8 @@ class Controller:
 
     Args:
         model: The UVMS model (the stack is bound to it here).
-        stack: Levels of tasks and hard constraints. The controller takes its tasks and
-            constraints over: a controller built earlier on any of them refuses to step
-            afterwards (each controller needs its own stack, :meth:`~uvms_qp.stack.Stack.copy`).
+        stack: Levels of tasks and hard constraints. The controller keeps its own run-time
+            memory of them (:meth:`slot`), so several controllers may share one stack.
         solver: Back-end (``"daqp"``, ``"cascade:<qpsolvers name>"``, ``"nullspace"``).
         dt: Control period [s] (turns position limits into rate bounds).
         metric: Diagonal W (nv,) of the final regularisation ``min zeta' W zeta`` (positive), or
@@ -153,13 +152,23 @@ class Controller:
         return self._scheme.step(state, t)
 
     def reset(self) -> None:
-        """Reset the run-time memory of every task and of the fallback ladder."""
+        """Reset this controller's memory of every task and constraint, and the fallback ladder."""
         self._scheme.reset()
 
     @property
     def tasks(self) -> tuple[Task, ...]:
         """All tasks, highest priority first."""
         return self.assembler.tasks
+
+    def slot(self, name: str) -> TaskSlot:
+        """The run-time memory of task ``name`` in this controller (:class:`~.TaskSlot`).
+
+        Its last error (``last_error``), its activation, a held target.
+
+        Raises:
+            InputError: an unknown task (the known ones are listed).
+        """
+        return self.assembler.slot(name)
 
     @property
     def safe(self) -> SafeSolver:

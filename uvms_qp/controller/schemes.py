@@ -194,8 +194,8 @@ class _StackScheme:
         primary back-end through the ladder (:meth:`SafeSolver.solve_once`, damped where
         needed); None when one fails or the deadline passes.
         """
-        tasks = self.assembler.tasks
-        a = [tasks[i].activation for i in ramping]
+        tasks, slots = self.assembler.tasks, self.assembler.slots
+        a = [slots[i].activation for i in ramping]
         x = np.zeros_like(main.x)
         damped_stack = self._damped_stack
         for mask in range(1 << len(ramping)):
@@ -216,7 +216,7 @@ class _StackScheme:
         problem = self._scheme_problem(solved)
         x, _ = clip_to_box(x, problem.lower, problem.upper)  # round-off only: the box is convex
         primary = self.safe.primary
-        active = ", ".join(f"{tasks[i].name} {tasks[i].activation:.3g}" for i in ramping)
+        active = ", ".join(f"{tasks[i].name} {slots[i].activation:.3g}" for i in ramping)
         result = evaluate(problem, x, Status.BLENDED, main.result.solver,
                           f"blended: activation {active}", level_tol=primary.level_tol,
                           hard_tol=primary.hard_tol, solve_time=main.result.solve_time)

@@ -604,5 +604,12 @@ class Model:
             f"{veh}; joints [{', '.join(self.joint_names)}]"
         )
 
+    def __deepcopy__(self, memo: dict[int, Any]) -> Model:
+        """The model itself: a loaded model is shared, never copied.
+
+        A deep copy of a stack or of a task bound to the model refers to the same model.
+        """
+        return self
+
     def __repr__(self) -> str:
         return f"<Model {self.summary()}>"

@@ -311,7 +311,7 @@ def simulate(
     n = scenario.steps
     nv, nq = int(model.nv), int(model.nq)
     n_levels = len(stack.levels)
-    probes = Probes(scenario, stack, n + 1)
+    probes = Probes(scenario, stack, n + 1, getattr(scheme, "slot", None))
     constraints = list(stack.constraints)
     for constraint in constraints:  # the run starts from the constraints' initial memory
         constraint.reset()

@@ -21,6 +21,7 @@ every run gets a copy).
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -450,7 +451,7 @@ class Scenario:
         for i, name in enumerate(self.schemes):
             if name != "hqp":
                 build_scheme(name, self, join("schemes", i), stack=stack)
-        apply_events(self.events, stack)
+        apply_events(self.events, stack, self.dt)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -482,10 +483,12 @@ def resolve_scenario(source: str | Path) -> Path:
         candidate = resources.files(_SCENARIO_PACKAGE).joinpath(f"{name}.toml")
         if candidate.is_file():
             return Path(str(candidate))
-        listing = ", ".join(bundled_scenarios()) or "(none)"
+        known = bundled_scenarios()
+        close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ConfigError(
-            f"unknown scenario {name!r}: not a file and not a bundled scenario; "
-            f"bundled scenarios: {listing}"
+            f"unknown scenario {name!r}{hint}: not a file and not a bundled scenario; "
+            f"bundled scenarios: {', '.join(known) or '(none)'}"
         )
     raise ConfigError(f"scenario file not found: {path}")
 
@@ -535,7 +538,8 @@ def _read_model(top: Table, base: Path) -> Model:
 
 
 def _initial_configuration(table: Table | None, model: Model) -> FloatArray:
-    eta0, joints0 = model.split(model.neutral())
+    """``q0``: the model's home (vehicle at the origin, home joint angles), or ``[initial]``."""
+    eta0, joints0 = model.split(model.home())
     eta = np.array(eta0, dtype=np.float64)
     joints = np.array(joints0, dtype=np.float64)
     path = "initial"
