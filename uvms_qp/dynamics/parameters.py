@@ -284,7 +284,7 @@ class PlantParameters:
             return NotImplemented
         return (self.name == other.name and self.vehicle == other.vehicle
                 and dict(self.links) == dict(other.links) and self.source == other.source
-                and self.thrusters is other.thrusters
+                and self.thrusters == other.thrusters
                 and all(getattr(self, f) == getattr(other, f) for f in PLANT_FIELDS))
 
     __hash__ = None  # type: ignore[assignment]

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -349,6 +349,16 @@ class ThrusterLayout:
             f"DOFs (allocation rank {full} of {len(rows)} actuated DOFs): move or turn a "
             f"thruster, or leave the DOF out of 'actuated'", culprits)
 
+    def __eq__(self, other: object) -> bool:
+        """Equal by value: the same thrusters' figures and actuated DOFs (a pickled copy)."""
+        if not isinstance(other, ThrusterLayout):
+            return NotImplemented
+        return (self.names == other.names and self.actuated == other.actuated
+                and all(_same_thruster(a, b) for a, b in zip(self.thrusters, other.thrusters,
+                                                               strict=True)))
+
+    __hash__ = None  # type: ignore[assignment]
+
     def power(self, forces: Any) -> FloatArray:
         """Electrical power of each thruster at ``forces`` [N] (n,), from its fit [W] (n,)."""
         return _power(as_vector(forces, "forces", self.size), _fits(self))
@@ -467,6 +477,11 @@ class ThrusterLayout:
                                     f"{', '.join(data) or '(none)'})")
             data = data[table]
         return cls.from_mapping(data, source=str(file))
+
+
+def _same_thruster(a: Thruster, b: Thruster) -> bool:
+    """Two thrusters with the same figures (arrays compared by value)."""
+    return all(np.array_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
 
 
 def _config_error(source: str, path: str, message: str) -> ConfigError:

@@ -130,6 +130,7 @@ def read_plant(table: Table | None, model: Any, base: Path) -> PlantSpec:
     if name is not None and file is not None:
         raise ConfigError("give either parameters (a bundled set) or file, not both",
                           table.at("file"))
+    parameters: Any = None
     try:
         if file is not None:
             path = Path(file) if Path(file).is_absolute() else (base / file).resolve()
