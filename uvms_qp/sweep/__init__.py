@@ -9,9 +9,8 @@ as it completes, and resumes a sweep that was interrupted; :func:`write_report`
 (:mod:`~uvms_qp.sweep.report`) turns the records into a table, a summary and figures.
 
 Modules: ``distributions`` (the laws of the file), ``spec`` (the file), ``outcome`` (a run's
-flat metrics), ``sampling`` (seeds and draws), ``realise`` (a run's scenario), ``measurement``
-(noise and delay of the measured pose), ``records`` (one run), ``executors``, ``engine``,
-``report``.
+flat metrics), ``sampling`` (seeds and draws), ``realise`` (a run's scenario), ``records`` (one
+run), ``executors``, ``engine``, ``report``.
 """
 
 from __future__ import annotations

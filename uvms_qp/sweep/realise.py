@@ -1,10 +1,14 @@
 """One run's scenario: the base scenario with the values the run drew.
 
-The values a file-level quantity takes (initial state, current, payload) are written into a copy
-of the base scenario's parsed TOML, which is then loaded like any scenario file: the run's
-scenario is checked like one, and is what a user would get by writing those numbers into the
-file. The rest is applied to the loaded scenario: the measured pose's noise and delay
-(:mod:`uvms_qp.sweep.measurement`).
+The values a file-level quantity takes (the plant, the initial state, the current, the sensors,
+the payload) are written into a copy of the base scenario's parsed TOML, which is then loaded
+like any scenario file: the run's scenario is checked like one, and is what a user would get by
+writing those numbers into the file. The plant parameters' relative factors, which a scenario
+file does not express, are applied to the loaded scenario's parameter set
+(:meth:`uvms_qp.dynamics.PlantParameters.scaled`).
+
+- ``plant = "dynamic"``: the ``[plant]`` table's ``type``; ``plant_parameters.set``: its
+  ``parameters`` (a bundled set, instead of the scenario's);
 
 - ``initial.position`` / ``initial.attitude`` / ``initial.joints``: offsets added to the base
   scenario's initial vehicle position [m], attitude angles [rad] and joint angles [rad] (a joint
@@ -12,38 +16,27 @@ file. The rest is applied to the loaded scenario: the measured pose's noise and 
 - ``current.direction`` [rad], ``current.speed`` [m/s], ``current.drift``: the ``[current]``
   table's keys (the others keep the base scenario's values); a task heading to the current
   follows the new direction;
+- ``sensors.*``: the ``[sensors]`` table (:class:`~uvms_qp.sim.sensors.Sensors`), its ``seed``
+  drawn from the run's seed;
 - ``payload.mass`` [kg] and ``payload.volume`` [m^3]: every pick-up event (an event that sets a
-  payload task's ``force``) sets the payload's weight in water ``(m - rho V) g`` [N] instead.
+  payload task's ``force``) sets the payload's weight in water ``(m - rho V) g`` [N] instead, and
+  the ``[plant.payload]`` table (the payload a dynamic plant's tool takes) these mass and volume.
 """
 
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
+import dataclasses
 from typing import Any
 
 import numpy as np
 
 from ..sim.scenario import Scenario, scenario_from_dict
-from .measurement import PoseNoise
 from .sampling import sensor_seed
-from .spec import GRAVITY, WATER_DENSITY, SweepSpec
+from .spec import GRAVITY, PARAMETER_SET, WATER_DENSITY, SweepSpec, plant_factors
 
 #: Base scenarios loaded in this process, by sweep digest (a worker loads each once).
 _BASES: dict[str, Scenario] = {}
-
-
-@dataclass(frozen=True)
-class RunSetup:
-    """What a run needs beyond the spec: its scenario and its measurement.
-
-    Attributes:
-        scenario: The run's scenario.
-        noise: Noise and delay of the measured pose, or None when the controller sees the truth.
-    """
-
-    scenario: Scenario
-    noise: PoseNoise | None
 
 
 def base_scenario(spec: SweepSpec) -> Scenario:
@@ -99,15 +92,31 @@ def _payload(data: dict[str, Any], values: dict[str, Any]) -> None:
         if isinstance(event, dict) and isinstance(event.get("update"), dict) \
                 and "force" in event["update"]:
             event["update"] = {**event["update"], "force": weight}
+    plant = data.get("plant")
+    if isinstance(plant, dict) and isinstance(plant.get("payload"), dict):
+        payload = {**plant["payload"], "mass": values["mass"]}
+        if "volume" in values:
+            payload["volume"] = values["volume"]
+        data["plant"] = {**plant, "payload": payload}
 
 
-def _noise(values: dict[str, Any], seed: int) -> PoseNoise | None:
-    noise = PoseNoise(**{key: float(v) for key, v in values.items()}, seed=sensor_seed(seed))
-    return None if noise.exact else noise
+def _sensors(data: dict[str, Any], values: dict[str, Any], seed: int) -> None:
+    if values:
+        data["sensors"] = {**(data.get("sensors") or {}), **values, "seed": sensor_seed(seed)}
 
 
-def realise(spec: SweepSpec, parameters: dict[str, Any], seed: int) -> RunSetup:
-    """The scenario and measurement of the run of seed ``seed`` that drew ``parameters``.
+def _plant(data: dict[str, Any], spec: SweepSpec, values: dict[str, Any]) -> None:
+    if spec.plant != "dynamic":
+        return
+    table = {**(data.get("plant") or {}), "type": "dynamic"}
+    if PARAMETER_SET in values:
+        table.pop("file", None)
+        table["parameters"] = values[PARAMETER_SET]
+    data["plant"] = table
+
+
+def realise(spec: SweepSpec, parameters: dict[str, Any], seed: int) -> Scenario:
+    """The scenario of the run of seed ``seed`` that drew ``parameters``.
 
     Raises:
         ConfigError: the drawn values make an invalid scenario (e.g. an initial pose that the
@@ -115,10 +124,17 @@ def realise(spec: SweepSpec, parameters: dict[str, Any], seed: int) -> RunSetup:
     """
     base = base_scenario(spec)
     data = copy.deepcopy(spec.scenario_data)
+    _plant(data, spec, _values(parameters, "plant_parameters"))
     _initial(data, base, _values(parameters, "initial"))
     _current(data, _values(parameters, "current"))
+    _sensors(data, _values(parameters, "sensors"), seed)
     _payload(data, _values(parameters, "payload"))
     scenario = scenario_from_dict(data, source=spec.scenario_path, name=base.name)
     if spec.duration is not None:
         scenario = scenario.with_duration(spec.duration)
-    return RunSetup(scenario, _noise(_values(parameters, "sensors"), seed))
+    factors = plant_factors(parameters)
+    if factors:
+        plant = dataclasses.replace(scenario.plant,
+                                    parameters=scenario.plant.parameters.scaled(factors))
+        scenario = dataclasses.replace(scenario, plant=plant)
+    return scenario

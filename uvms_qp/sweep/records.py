@@ -30,7 +30,6 @@ from typing import Any
 
 from ..hqp.linalg import one_blas_thread
 from ..sim.runner import simulate
-from .measurement import MeasuredScheme
 from .outcome import run_outcome
 from .realise import realise
 from .sampling import draw, run_seed
@@ -88,14 +87,8 @@ def simulate_run(spec: SweepSpec, seed: int, parameters: dict[str, Any] | None =
     """
     if parameters is None:
         parameters = draw(spec.variables, seed)
-    setup = realise(spec, parameters, seed)
-    scenario = setup.scenario
-    stack = scenario.build_stack()
-    scheme: Any = scenario.make_controller(stack=stack)
-    if setup.noise is not None:
-        scheme = MeasuredScheme(scheme, scenario.model, setup.noise, scenario.dt)
     with one_blas_thread:
-        return parameters, simulate(scenario, scheme, stack=stack)
+        return parameters, simulate(realise(spec, parameters, seed))
 
 
 def run_one(task: RunTask) -> dict[str, Any]:

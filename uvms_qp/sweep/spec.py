@@ -25,11 +25,13 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from .. import dynamics
+from ..dynamics.parameters import DEFAULT_GRAVITY, DEFAULT_WATER_DENSITY
+from ..errors import ConfigError, UvmsQpError
 from ..model import Model
 from ..sim.config import Table, describe, did_you_mean, read_toml
 from ..sim.scenario import Phase, Scenario, resolve_scenario, scenario_from_dict
-from .distributions import Distribution, check_support, read_distribution
+from .distributions import Choice, Distribution, check_support, read_distribution
 from .outcome import metric_names
 
 #: Most runs a sweep may ask for.
@@ -71,8 +73,8 @@ SENSOR_KEYS: dict[str, tuple[str, str, bool]] = {
 #: Initial-state perturbations (added to the scenario's initial state): key -> unit.
 INITIAL_KEYS = {"position": "m", "attitude": "rad", "joints": "rad"}
 #: Gravity [m/s^2] and water density [kg/m^3] turning a payload into its weight in water.
-GRAVITY = 9.81
-WATER_DENSITY = 1025.0
+GRAVITY = DEFAULT_GRAVITY
+WATER_DENSITY = DEFAULT_WATER_DENSITY
 
 
 @dataclass(frozen=True)
@@ -279,6 +281,12 @@ def _read_plant_parameters(table: Table | None, plant: str) -> list[Variable]:
         where = table.at(key)
         if key == PARAMETER_SET:
             dist = read_distribution(table.raw(key), where, strings=True)
+            known = dynamics.plant_parameter_sets()
+            for name in _options(dist):
+                if name not in known:
+                    raise ConfigError(f"unknown parameter set {name!r}; bundled sets: "
+                                      f"{', '.join(known)}{did_you_mean(str(name), known)}",
+                                      where)
             out.append(Variable(where, dist, 1, "name"))
             continue
         if key not in PLANT_PARAMETERS:
@@ -295,6 +303,48 @@ def _read_plant_parameters(table: Table | None, plant: str) -> list[Variable]:
         out.append(Variable(where, dist, 1, "relative"))
     table.finish()
     return out
+
+
+def _options(dist: Distribution) -> tuple[Any, ...]:
+    """Every value a choice or a fixed value can take."""
+    return dist.options if isinstance(dist, Choice) else (getattr(dist, "value", None),)
+
+
+def plant_factors(parameters: dict[str, Any]) -> dict[str, float]:
+    """The relative factors ``1 + x`` a run drew for the plant's parameters, by path."""
+    prefix = "plant_parameters."
+    return {name[len(prefix):]: 1.0 + float(value) for name, value in parameters.items()
+            if name.startswith(prefix) and name != prefix + PARAMETER_SET}
+
+
+def _check_plant_extremes(scenario: Scenario, variables: list[Variable]) -> None:
+    """Scale the plant's parameters by each spread's extreme factors, as the runs may.
+
+    Every parameter set a run may use is scaled by each relative factor at both ends of its
+    spread, so that the plant's own checks (a positive mass and volume, positive definite
+    matrices) refuse the spread before any run.
+
+    Raises:
+        ConfigError: at the spread's path, with the plant's reason.
+    """
+    chosen = next((v for v in variables if v.name.endswith("." + PARAMETER_SET)), None)
+    names: list[Any] = list(_options(chosen.dist)) if chosen is not None else [None]
+    for name in names:
+        base = (scenario.plant.parameters if name is None
+                else dynamics.plant_parameters(str(name)))
+        for variable in variables:
+            if variable.unit != "relative":
+                continue
+            path = variable.name.removeprefix("plant_parameters.")
+            for end in variable.dist.support:
+                if not math.isfinite(end):
+                    continue
+                try:
+                    base.scaled({path: 1.0 + end})
+                except UvmsQpError as exc:
+                    where = f" of the set {name!r}" if name is not None else ""
+                    raise ConfigError(f"at the factor 1 + ({end:g}){where}: {exc}",
+                                      variable.name) from exc
 
 
 def _read_current(table: Table | None, scenario: Scenario) -> list[Variable]:
@@ -360,6 +410,13 @@ def _pickup_events(data: dict[str, Any]) -> list[int]:
             and "force" in e["update"]]
 
 
+def _plant_payload(data: dict[str, Any]) -> dict[str, Any] | None:
+    """The scenario's ``[plant.payload]`` table (the payload a dynamic plant's tool takes)."""
+    plant = data.get("plant")
+    payload = plant.get("payload") if isinstance(plant, dict) else None
+    return payload if isinstance(payload, dict) else None
+
+
 def _read_payload(table: Table | None, data: dict[str, Any], name: str) -> list[Variable]:
     if table is None:
         return []
@@ -368,9 +425,9 @@ def _read_payload(table: Table | None, data: dict[str, Any], name: str) -> list[
     table.finish()
     if mass is None:
         raise ConfigError("missing required field 'mass'", table.path)
-    if not _pickup_events(data):
+    if not _pickup_events(data) and _plant_payload(data) is None:
         raise ConfigError(f"the scenario {name!r} picks up no payload (no event sets a payload "
-                          "task's force)", table.path)
+                          "task's force, no [plant.payload])", table.path)
     if volume is not None:
         net = mass.dist.support[0] - WATER_DENSITY * volume.dist.support[1]
         if net < 0.0:
@@ -428,6 +485,8 @@ def sweep_from_dict(data: dict[str, Any], *, source: Path | None = None,
     duration = top.take_number("duration", None, positive=True)
     if duration is not None:
         scenario = scenario.with_duration(duration, top.at("duration"))
+    if plant == "dynamic":
+        scenario = scenario.with_plant("dynamic", top.at("plant"))
     variables = [
         *_read_plant_parameters(top.take_table("plant_parameters"), plant),
         *_read_current(top.take_table("current"), scenario),
@@ -437,8 +496,8 @@ def sweep_from_dict(data: dict[str, Any], *, source: Path | None = None,
     ]
     success = top.take_table("success")
     top.finish()
-    if plant == "dynamic" and not hasattr(scenario, "plant"):
-        raise ConfigError("this installation has no dynamic plant", top.at("plant"))
+    if plant == "dynamic":
+        _check_plant_extremes(scenario, variables)
     pilot = dataclasses.replace(scenario, phases=tuple(
         Phase(p.name, 0.0, 2.0 * scenario.dt) for p in scenario.phases))
     criteria = _read_success(success, metric_names(pilot))
