@@ -281,11 +281,11 @@ def _read_plant_parameters(table: Table | None, plant: str) -> list[Variable]:
         where = table.at(key)
         if key == PARAMETER_SET:
             dist = read_distribution(table.raw(key), where, strings=True)
-            known = dynamics.plant_parameter_sets()
+            sets = dynamics.plant_parameter_sets()
             for name in _options(dist):
-                if name not in known:
+                if name not in sets:
                     raise ConfigError(f"unknown parameter set {name!r}; bundled sets: "
-                                      f"{', '.join(known)}{did_you_mean(str(name), known)}",
+                                      f"{', '.join(sets)}{did_you_mean(str(name), sets)}",
                                       where)
             out.append(Variable(where, dist, 1, "name"))
             continue
