@@ -202,7 +202,8 @@ def _histograms(spec: SweepSpec, records: Sequence[dict[str, Any]]) -> Any:
     names = [n for n in names if _numbers(records, n).size] or ["(no numeric metric)"]
     cols = min(3, len(names))
     rows = math.ceil(len(names) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False,
+                             layout="constrained")
     good = [r for r in records if r["success"]]
     bad = [r for r in records if not r["success"]]
     for ax, name in zip(axes.flat, names, strict=False):
@@ -231,7 +232,8 @@ def _parameter_panels(spec: SweepSpec, records: Sequence[dict[str, Any]],
     varied: list[Variable | None] = [*spec.varied] or [None]
     cols = min(3, len(varied))
     rows = math.ceil(len(varied) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False,
+                             layout="constrained")
     overall = summary["success_rate"]
     for ax, variable in zip(axes.flat, varied, strict=False):
         if variable is None:
