@@ -7,8 +7,8 @@ writing those numbers into the file. The plant parameters' relative factors, whi
 file does not express, are applied to the loaded scenario's parameter set
 (:meth:`uvms_qp.dynamics.PlantParameters.scaled`).
 
-- ``plant = "dynamic"``: the ``[plant]`` table's ``type``; ``plant_parameters.set``: its
-  ``parameters`` (a bundled set, instead of the scenario's);
+- ``plant``: the ``[plant]`` table's ``type`` (the sweep's plant, whatever the scenario's);
+  ``plant_parameters.set``: its ``parameters`` (a bundled set, instead of the scenario's);
 
 - ``initial.position`` / ``initial.attitude`` / ``initial.joints``: offsets added to the base
   scenario's initial vehicle position [m], attitude angles [rad] and joint angles [rad] (a joint
@@ -106,9 +106,9 @@ def _sensors(data: dict[str, Any], values: dict[str, Any], seed: int) -> None:
 
 
 def _plant(data: dict[str, Any], spec: SweepSpec, values: dict[str, Any]) -> None:
-    if spec.plant != "dynamic":
+    if spec.plant != "dynamic" and not isinstance(data.get("plant"), dict):
         return
-    table = {**(data.get("plant") or {}), "type": "dynamic"}
+    table = {**(data.get("plant") or {}), "type": spec.plant}  # the sweep's plant decides
     if PARAMETER_SET in values:
         table.pop("file", None)
         table["parameters"] = values[PARAMETER_SET]

@@ -485,8 +485,7 @@ def sweep_from_dict(data: dict[str, Any], *, source: Path | None = None,
     duration = top.take_number("duration", None, positive=True)
     if duration is not None:
         scenario = scenario.with_duration(duration, top.at("duration"))
-    if plant == "dynamic":
-        scenario = scenario.with_plant("dynamic", top.at("plant"))
+    scenario = scenario.with_plant(plant, top.at("plant"))  # the sweep's plant decides
     variables = [
         *_read_plant_parameters(top.take_table("plant_parameters"), plant),
         *_read_current(top.take_table("current"), scenario),

@@ -75,3 +75,17 @@ def test_a_bad_dynamic_sweep_names_its_culprit(tmp_path, old, new, path, words):
         load_sweep(write_sweep(tmp_path, text=text))
     assert info.value.path == path, str(info.value)
     assert words in str(info.value)
+
+
+def test_the_sweeps_plant_decides_whatever_the_scenarios(tmp_path):
+    from uvms_qp.sim.scenario import resolve_scenario
+
+    text = resolve_scenario("bluerov2_demo").read_text()
+    assert 'type = "kinematic"' in text
+    (tmp_path / "floating.toml").write_text(text.replace('type = "kinematic"', 'type = "dynamic"'))
+    sweep = DYNAMIC.replace('scenario = "bluerov2_demo"', 'scenario = "floating.toml"')
+    sweep = sweep.replace('plant = "dynamic"', 'plant = "kinematic"')
+    sweep = sweep.split("[plant_parameters]")[0] + "[success]" + sweep.split("[success]")[1]
+    spec = load_sweep(write_sweep(tmp_path, runs=1, text=sweep))
+    seed = run_seed(spec.seed, 0)
+    assert realise(spec, draw(spec.variables, seed), seed).plant.kind == "kinematic"
