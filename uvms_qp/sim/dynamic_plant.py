@@ -95,7 +95,8 @@ class DynamicSeries:
         velocity_reference: The reference of each tick (M, 6) (NaN on passive DOFs).
         joint_rates: True joint rates at the start of each tick (M, n_joints) [rad/s].
         joint_reference: Joint rate references of each tick (M, n_joints) [rad/s].
-        joint_torque: Joint torques the servos produced at the end of each tick
+        joint_torque: Joint torques the servos produced at the start of each tick (its first
+            physics step's, :attr:`~uvms_qp.dynamics.FloatingPlant.joint_torques`)
             (M, n_joints) [N m].
         actuated: Actuated body DOFs (names in ``nu`` order).
         payload_time: When the payload was attached [s], or None.
@@ -244,10 +245,12 @@ class DynamicPlant:
             records["body_velocity"].append(nu.copy())
             records["joint_rates"].append(v[6:].copy())
             time = tick
-            for _ in range(self.physics_steps):
+            for i in range(self.physics_steps):
                 thrusters.step(h)
                 q, v = physics.step(q, v, thrusters.wrench(), joint_ref, time, h)
                 time += h
+                if i == 0:
+                    records["joint_torque"].append(physics.joint_torques)
             records["thrust"].append(thrusters.forces)
             records["thrust_command"].append(allocation.forces)
             records["saturated"].append(allocation.saturated)
@@ -257,8 +260,6 @@ class DynamicPlant:
             records["wrench_unmet"].append(allocation.unmet)
             records["velocity_reference"].append(nu_ref)
             records["joint_reference"].append(joint_ref)
-            records["joint_torque"].append(
-                physics.accelerations(q, v, thrusters.wrench(), joint_ref, time)[1])
         self._q, self._v = q, v
         return q
 
