@@ -154,6 +154,11 @@ def run(args: argparse.Namespace) -> int:
             except OSError as exc:
                 raise ConfigError(f"cannot write {args.view!r}: {exc.strerror or exc}",
                                   "--view") from None
+    if result.stopped is not None:
+        stop = result.stopped
+        print(f"error: the run stopped at t = {stop['time']:g} s: {stop['error']}; "
+              f"{path} holds the {result.steps} control steps before it", file=sys.stderr)
+        return 1
     if not args.quiet:
         simulated = result.steps * result.dt
         print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s ({simulated:g} s) in "
@@ -166,11 +171,6 @@ def run(args: argparse.Namespace) -> int:
         print(_summary(result.metrics()))
         if reference is not None:
             print(dynamic_summary(result.metrics(), reference.metrics()))
-    if result.stopped is not None:
-        stop = result.stopped
-        print(f"error: the run stopped at t = {stop['time']:g} s: {stop['error']}; "
-              f"{path} holds the {result.steps} steps before it", file=sys.stderr)
-        return 1
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
     return 0

@@ -572,8 +572,10 @@ def _read_current(table: Table | None) -> ConstantCurrent | None:
     direction = table.take_number("direction", required=True)
     speed = table.take_number("speed", 0.0, nonnegative=True)
     drift = table.take_number("drift", 0.0, minimum=0.0, maximum=1.0)
+    oscillation = table.take_number("oscillation", 0.0, nonnegative=True)
+    period = table.take_number("period", 60.0, positive=True)
     table.finish()
-    return ConstantCurrent(direction, speed, drift)  # type: ignore[arg-type]
+    return ConstantCurrent(direction, speed, drift, oscillation, period)  # type: ignore[arg-type]
 
 
 def _read_phases(top: Table, duration: float) -> list[Phase]:
@@ -723,7 +725,8 @@ def scenario_from_dict(
     scheme_options = _read_scheme_options(top, schemes)
     method = top.take_str("integrator", "euler", choices=("euler", "rk4"))
     q0 = _initial_configuration(top.take_table("initial"), model)
-    current = _read_current(top.take_table("current", keys=("direction", "speed", "drift")))
+    current = _read_current(top.take_table(
+        "current", keys=("direction", "speed", "drift", "oscillation", "period")))
     passive_table = top.take_table("passive")
     passive, tau = "hold", 2.0
     if passive_table is not None:
@@ -746,7 +749,7 @@ def scenario_from_dict(
     tracking, reference = _tracking(top, stack, tables)
     phases = _read_phases(top, duration)
     base = source.parent if source is not None else Path.cwd()
-    plant = read_plant(top.take_table("plant", keys=PLANT_KEYS), model, base)
+    plant = read_plant(top.take_table("plant", keys=PLANT_KEYS), model, base, dt, duration)
     sensors = read_sensors(top.take_table("sensors", keys=SENSOR_KEYS))
     top.finish()
     scenario = Scenario(
