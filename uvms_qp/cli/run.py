@@ -91,7 +91,8 @@ DYNAMIC_KEYS = (
     ("pitch_max", "rad"),
     ("saturation_share_max", ""),
     ("energy", "J"),
-    ("unmet_wrench_max", "N, N m"),
+    ("unmet_force_max", "N"),
+    ("unmet_moment_max", "N m"),
 )
 
 
@@ -147,7 +148,8 @@ def run(args: argparse.Namespace) -> int:
         with writing_output(args.out):
             path = write_results(result, args.out, reference=reference)
             figures = [] if args.no_plots else plot_results(result, args.out,
-                                                            progress=not args.quiet)
+                                                            progress=not args.quiet,
+                                                            reference=reference)
         if args.view:
             try:
                 view = write_view(scenario.model, result, args.view)

@@ -6,7 +6,9 @@
   panel per actuated DOF, sampled at every servo tick;
 - ``attitude_disturbance.png``: roll and pitch of the vehicle, and the unmet part of the demanded
   wrench (what the thrusters could not give);
-- ``joint_torques.png``: the torque each joint servo produced.
+- ``joint_torques.png``: the torque each joint servo produced;
+- ``against_kinematic.png`` (given the kinematic run of the same scenario): the tool's error, the
+  vehicle's position and its pitch on both plants.
 
 Dotted vertical lines mark the scenario's events and the payload's pick-up.
 """
@@ -19,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._figures import Builder, pyplot, time_axis
+from .metrics import ee_errors
 
 if TYPE_CHECKING:  # pragma: no cover
     from .dynamic_plant import DynamicSeries
@@ -49,9 +52,10 @@ def _thrusters(result: SimulationResult) -> Any:
     axes[0].axhline(float(series.thrust_lower.max()), color="0.4", linestyle="--",
                     linewidth=0.8, label="reverse limit")
     axes[0].set_ylabel("thrust [N]")
-    axes[0].legend(loc="upper right", fontsize="x-small", ncol=5)
-    axes[1].plot(series.time, series.power, color="tab:red")
+    axes[0].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
+    axes[1].plot(series.time, series.power, color="k", label="all thrusters")
     axes[1].set_ylabel("power [W]")
+    axes[1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
@@ -87,9 +91,9 @@ def _attitude(result: SimulationResult) -> Any:
     plt = pyplot()
     fig, axes = plt.subplots(2, 1, figsize=(9, 5), sharex=True)
     t = result.time_states
-    axes[0].plot(t, np.degrees(result.eta[:, 3]), label="roll phi")
-    axes[0].plot(t, np.degrees(result.eta[:, 4]), label="pitch theta")
-    axes[0].set_ylabel("attitude [deg]")
+    axes[0].plot(t, result.eta[:, 3], label="roll phi")
+    axes[0].plot(t, result.eta[:, 4], label="pitch theta")
+    axes[0].set_ylabel("attitude [rad]")
     axes[0].legend(loc="best", fontsize="small")
     unmet = np.abs(series.wrench_unmet)
     axes[1].plot(series.time, np.linalg.norm(unmet[:, :3], axis=1), label="force [N]")
@@ -117,11 +121,42 @@ def _joint_torques(result: SimulationResult) -> Any:
     return fig
 
 
-def dynamic_builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
-    """The dynamic run's figures as ``(file name, builder)`` (none for a kinematic run)."""
+def _against_kinematic(result: SimulationResult, reference: SimulationResult) -> Any:
+    plt = pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
+    runs = (("kinematic", reference, "0.5", "--"), ("dynamic", result, "tab:blue", "-"))
+    for label, run, colour, style in runs:
+        axes[0].semilogy(run.time_states, np.maximum(ee_errors(run), 1e-9), color=colour,
+                         linestyle=style, label=label)
+        for i, axis in enumerate("xyz"):
+            axes[1].plot(run.time_states, run.vehicle_position[:, i], color=colour,
+                         linestyle=style, alpha=(0.5 + 0.25 * i),
+                         label=f"{axis} ({label})")
+        axes[2].plot(run.time_states, run.eta[:, 4], color=colour, linestyle=style,
+                     label=f"pitch ({label})")
+    axes[0].set_ylabel("tool error [m]")
+    axes[1].set_ylabel("vehicle position [m]")
+    axes[2].set_ylabel("pitch [rad]")
+    for ax in axes:
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
+        _marks(ax, result)
+    time_axis(axes[2])
+    fig.suptitle(f"{result.scenario}: the floating vehicle against the kinematic run")
+    return fig
+
+
+def dynamic_builders(result: SimulationResult, reference: SimulationResult | None = None
+                     ) -> Iterator[tuple[str, Builder]]:
+    """The dynamic run's figures as ``(file name, builder)`` (none for a kinematic run).
+
+    ``reference``: the kinematic run of the same scenario, drawn beside the dynamic one in
+    ``against_kinematic.png`` (tool error, vehicle position, pitch).
+    """
     series = result.dynamics
     if series is None or not series.time.size:
         return
+    if reference is not None and result.eta.shape[1] == 6:
+        yield "against_kinematic.png", lambda: _against_kinematic(result, reference)
     yield "thrusters.png", lambda: _thrusters(result)
     yield "velocity_tracking.png", lambda: _velocity_tracking(result)
     if result.eta.shape[1] == 6:

@@ -255,7 +255,8 @@ def _payload_moment(result: SimulationResult) -> Any:
     return fig
 
 
-def _builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
+def _builders(result: SimulationResult, reference: SimulationResult | None = None
+              ) -> Iterator[tuple[str, Builder]]:
     """The run's figures that have something to show, as ``(file name, builder)``."""
     yield "tool_tracking.png", lambda: _tool_tracking(result)
     if result.eta.shape[1]:
@@ -269,7 +270,7 @@ def _builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
         yield "residuals.png", lambda: _residuals(result)
     if result.payload_moment is not None:
         yield "payload_moment.png", lambda: _payload_moment(result)
-    yield from dynamic_builders(result)
+    yield from dynamic_builders(result, reference)
 
 
 def run_figures(result: SimulationResult) -> dict[str, Any]:
@@ -278,14 +279,16 @@ def run_figures(result: SimulationResult) -> dict[str, Any]:
 
 
 def plot_results(result: SimulationResult, out_dir: str | Path, *,
-                 progress: bool = False) -> list[Path]:
+                 progress: bool = False, reference: SimulationResult | None = None
+                 ) -> list[Path]:
     """Write the figures of ``result`` into ``out_dir``; return their paths.
 
     Args:
         result: The run.
+        reference: For a dynamic run, the kinematic run of the same scenario (drawn beside it).
         out_dir: Output directory (created if needed). A figure path there that is a symbolic
             link is replaced by the figure, never followed.
         progress: Report the figures as they are written (on standard error).
     """
-    return write_figures(_builders(result), output_dir(out_dir),
+    return write_figures(_builders(result, reference), output_dir(out_dir),
                          label=f"{result.scenario} figures", progress=progress)
