@@ -61,6 +61,7 @@ from .stack_tables import (
     read_trajectories,
 )
 from .trajectories import Trajectory
+from .trajectory_start import warn_far_starts
 
 #: Most control steps a run may take (``duration / dt``, command-line overrides included).
 MAX_STEPS = 2_000_000
@@ -412,6 +413,7 @@ class Scenario:
             sensors=sensors,
         )
         check.check_period(scenario.dt)  # the events are then checked against the period
+        warn_far_starts(check, model.state(q0))  # before the events change the targets
         scenario._check_objects(check)
         scenario._check_hard_set(scenario.make_controller(stack=check))
         return scenario
@@ -778,6 +780,7 @@ def scenario_from_dict(
     )
     check_periods(tables, stack, dt)
     scenario._check_plant()
+    warn_far_starts(stack, model.state(q0))  # before the events change the targets
     scenario._check_objects(stack)
     try:
         controller = scenario.make_controller(stack=stack)
