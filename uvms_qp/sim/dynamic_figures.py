@@ -8,7 +8,8 @@
   wrench (what the thrusters could not give);
 - ``joint_torques.png``: the torque each joint servo produced.
 
-Dotted vertical lines mark the scenario's events and the payload's pick-up.
+Dotted vertical lines mark the scenario's events and the payload's pick-up, each named in the
+figure's legend.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._figures import Builder, pyplot, time_axis
+from ._figures import Builder, legend, mark_events, pyplot, time_axis
 
 if TYPE_CHECKING:  # pragma: no cover
     from .dynamic_plant import DynamicSeries
@@ -29,12 +30,7 @@ _UNITS = {"u": "m/s", "v": "m/s", "w": "m/s", "p": "rad/s", "q": "rad/s", "r": "
 
 
 def _marks(ax: Any, result: SimulationResult) -> None:
-    for event in result.events:
-        ax.axvline(event["time"], color="0.6", linestyle=":", linewidth=1.0)
-    series: DynamicSeries = result.dynamics
-    if series.payload_time is not None:
-        ax.axvline(series.payload_time, color="tab:brown", linestyle=":", linewidth=1.0,
-                   label="payload taken")
+    mark_events(ax, result.events, result.dynamics.payload_time)
 
 
 def _thrusters(result: SimulationResult) -> Any:
@@ -49,12 +45,12 @@ def _thrusters(result: SimulationResult) -> Any:
     axes[0].axhline(float(series.thrust_lower.max()), color="0.4", linestyle="--",
                     linewidth=0.8, label="reverse limit")
     axes[0].set_ylabel("thrust [N]")
-    axes[0].legend(loc="upper right", fontsize="x-small", ncol=5)
     axes[1].plot(series.time, series.power, color="tab:red")
     axes[1].set_ylabel("power [W]")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
+    legend(axes[0], loc="upper right", fontsize="x-small", ncol=5)
     fig.suptitle(f"{result.scenario}: thruster forces and electrical power "
                  f"({series.energy[-1]:.0f} J in all)" if series.energy.size else
                  f"{result.scenario}: thruster forces")
@@ -76,7 +72,7 @@ def _velocity_tracking(result: SimulationResult) -> Any:
                 label="vehicle")
         ax.set_ylabel(f"{name} [{_UNITS[name]}]")
         _marks(ax, result)
-    axes[0, 0].legend(loc="upper right", fontsize="small")
+    legend(axes[0, 0], loc="upper right", fontsize="small")
     time_axis(axes[-1, 0])
     fig.suptitle(f"{result.scenario}: vehicle body velocity against the controller's reference")
     return fig
@@ -90,15 +86,14 @@ def _attitude(result: SimulationResult) -> Any:
     axes[0].plot(t, np.degrees(result.eta[:, 3]), label="roll phi")
     axes[0].plot(t, np.degrees(result.eta[:, 4]), label="pitch theta")
     axes[0].set_ylabel("attitude [deg]")
-    axes[0].legend(loc="best", fontsize="small")
     unmet = np.abs(series.wrench_unmet)
     axes[1].plot(series.time, np.linalg.norm(unmet[:, :3], axis=1), label="force [N]")
     axes[1].plot(series.time, np.linalg.norm(unmet[:, 3:], axis=1), label="moment [N m]")
     axes[1].set_ylabel("unmet wrench")
-    axes[1].legend(loc="best", fontsize="small")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
+        legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: roll and pitch disturbance, wrench the thrusters lacked")
     return fig
 
@@ -110,9 +105,9 @@ def _joint_torques(result: SimulationResult) -> Any:
     for i, name in enumerate(result.joint_names):
         ax.plot(series.time, series.joint_torque[:, i], label=name, linewidth=1.0)
     ax.set_ylabel("joint torque [N m]")
-    ax.legend(loc="best", fontsize="small")
     time_axis(ax)
     _marks(ax, result)
+    legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: torques of the arm's joint servos")
     return fig
 
