@@ -354,6 +354,10 @@ class Scenario:
             InputError: invalid dt/duration/q0/deadline, an event naming an unknown task
                 (:class:`~uvms_qp.errors.UnknownNameError`) or carrying an update its task
                 rejects, or any error of the stack, schemes or controller.
+
+        Warns:
+            ScenarioWarning: a trajectory starts away from the frame it moves
+                (:mod:`uvms_qp.sim.trajectory_start`).
         """
         dt = _check_dt(as_scalar(dt, "dt", positive=True), "dt")
         duration = as_scalar(duration, "duration", positive=True)
@@ -503,6 +507,10 @@ def load_scenario(source: str | Path) -> Scenario:
 
     Raises:
         ConfigError: the file is missing or malformed, or any field is invalid (path in message).
+
+    Warns:
+        ScenarioWarning: a trajectory starts away from the frame it moves
+            (:mod:`uvms_qp.sim.trajectory_start`).
     """
     path = resolve_scenario(source)
     data = read_toml(path)
