@@ -10,7 +10,8 @@
 - ``against_kinematic.png`` (given the kinematic run of the same scenario): the tool's error, the
   vehicle's position and its pitch on both plants.
 
-Dotted vertical lines mark the scenario's events and the payload's pick-up.
+Dotted vertical lines mark the scenario's events and the payload's pick-up, each named in the
+figure's legend.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._figures import Builder, pyplot, time_axis
+from ._figures import Builder, legend, mark_events, pyplot, time_axis
 from .metrics import ee_errors
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -32,12 +33,7 @@ _UNITS = {"u": "m/s", "v": "m/s", "w": "m/s", "p": "rad/s", "q": "rad/s", "r": "
 
 
 def _marks(ax: Any, result: SimulationResult) -> None:
-    for event in result.events:
-        ax.axvline(event["time"], color="0.6", linestyle=":", linewidth=1.0)
-    series: DynamicSeries = result.dynamics
-    if series.payload_time is not None:
-        ax.axvline(series.payload_time, color="tab:brown", linestyle=":", linewidth=1.0,
-                   label="payload taken")
+    mark_events(ax, result.events, result.dynamics.payload_time)
 
 
 def _thrusters(result: SimulationResult) -> Any:
@@ -52,13 +48,12 @@ def _thrusters(result: SimulationResult) -> Any:
     axes[0].axhline(float(series.thrust_lower.max()), color="0.4", linestyle="--",
                     linewidth=0.8, label="reverse limit")
     axes[0].set_ylabel("thrust [N]")
-    axes[0].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
     axes[1].plot(series.time, series.power, color="k", label="all thrusters")
     axes[1].set_ylabel("power [W]")
-    axes[1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
+        legend(ax, loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
     fig.suptitle(f"{result.scenario}: thruster forces and electrical power "
                  f"({series.energy[-1]:.0f} J in all)" if series.energy.size else
                  f"{result.scenario}: thruster forces")
@@ -80,7 +75,7 @@ def _velocity_tracking(result: SimulationResult) -> Any:
                 label="vehicle")
         ax.set_ylabel(f"{name} [{_UNITS[name]}]")
         _marks(ax, result)
-    axes[0, 0].legend(loc="upper right", fontsize="small")
+    legend(axes[0, 0], loc="upper right", fontsize="small")
     time_axis(axes[-1, 0])
     fig.suptitle(f"{result.scenario}: vehicle body velocity against the controller's reference")
     return fig
@@ -94,15 +89,14 @@ def _attitude(result: SimulationResult) -> Any:
     axes[0].plot(t, result.eta[:, 3], label="roll phi")
     axes[0].plot(t, result.eta[:, 4], label="pitch theta")
     axes[0].set_ylabel("attitude [rad]")
-    axes[0].legend(loc="best", fontsize="small")
     unmet = np.abs(series.wrench_unmet)
     axes[1].plot(series.time, np.linalg.norm(unmet[:, :3], axis=1), label="force [N]")
     axes[1].plot(series.time, np.linalg.norm(unmet[:, 3:], axis=1), label="moment [N m]")
     axes[1].set_ylabel("unmet wrench")
-    axes[1].legend(loc="best", fontsize="small")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
+        legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: roll and pitch disturbance, wrench the thrusters lacked")
     return fig
 
@@ -114,9 +108,9 @@ def _joint_torques(result: SimulationResult) -> Any:
     for i, name in enumerate(result.joint_names):
         ax.plot(series.time, series.joint_torque[:, i], label=name, linewidth=1.0)
     ax.set_ylabel("joint torque [N m]")
-    ax.legend(loc="best", fontsize="small")
     time_axis(ax)
     _marks(ax, result)
+    legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: torques of the arm's joint servos")
     return fig
 
@@ -130,17 +124,16 @@ def _against_kinematic(result: SimulationResult, reference: SimulationResult) ->
                          linestyle=style, label=label)
         for i, axis in enumerate("xyz"):
             axes[1].plot(run.time_states, run.vehicle_position[:, i], color=colour,
-                         linestyle=style, alpha=(0.5 + 0.25 * i),
-                         label=f"{axis} ({label})")
+                         linestyle=style, alpha=(0.5 + 0.25 * i), label=f"{axis} ({label})")
         axes[2].plot(run.time_states, run.eta[:, 4], color=colour, linestyle=style,
                      label=f"pitch ({label})")
     axes[0].set_ylabel("tool error [m]")
     axes[1].set_ylabel("vehicle position [m]")
     axes[2].set_ylabel("pitch [rad]")
-    for ax in axes:
-        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
-        _marks(ax, result)
     time_axis(axes[2])
+    for ax in axes:
+        _marks(ax, result)
+        legend(ax, loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
     fig.suptitle(f"{result.scenario}: the floating vehicle against the kinematic run")
     return fig
 

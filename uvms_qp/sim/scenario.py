@@ -61,6 +61,7 @@ from .stack_tables import (
     read_trajectories,
 )
 from .trajectories import Trajectory
+from .trajectory_start import warn_far_starts
 
 #: Most control steps a run may take (``duration / dt``, command-line overrides included).
 MAX_STEPS = 2_000_000
@@ -353,6 +354,10 @@ class Scenario:
             InputError: invalid dt/duration/q0/deadline, an event naming an unknown task
                 (:class:`~uvms_qp.errors.UnknownNameError`) or carrying an update its task
                 rejects, or any error of the stack, schemes or controller.
+
+        Warns:
+            ScenarioWarning: a trajectory starts away from the frame it moves
+                (:mod:`uvms_qp.sim.trajectory_start`).
         """
         dt = _check_dt(as_scalar(dt, "dt", positive=True), "dt")
         duration = as_scalar(duration, "duration", positive=True)
@@ -412,6 +417,7 @@ class Scenario:
             sensors=sensors,
         )
         check.check_period(scenario.dt)  # the events are then checked against the period
+        warn_far_starts(check, model.state(q0))  # before the events change the targets
         scenario._check_objects(check)
         scenario._check_hard_set(scenario.make_controller(stack=check))
         return scenario
@@ -501,6 +507,10 @@ def load_scenario(source: str | Path) -> Scenario:
 
     Raises:
         ConfigError: the file is missing or malformed, or any field is invalid (path in message).
+
+    Warns:
+        ScenarioWarning: a trajectory starts away from the frame it moves
+            (:mod:`uvms_qp.sim.trajectory_start`).
     """
     path = resolve_scenario(source)
     data = read_toml(path)
@@ -781,6 +791,7 @@ def scenario_from_dict(
     )
     check_periods(tables, stack, dt)
     scenario._check_plant()
+    warn_far_starts(stack, model.state(q0))  # before the events change the targets
     scenario._check_objects(stack)
     try:
         controller = scenario.make_controller(stack=stack)
