@@ -27,10 +27,12 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import warnings
 from typing import Any
 
 import numpy as np
 
+from ..errors import ScenarioWarning
 from ..sim.scenario import Scenario, scenario_from_dict
 from .sampling import sensor_seed
 from .spec import GRAVITY, PARAMETER_SET, WATER_DENSITY, SweepSpec, plant_factors
@@ -43,9 +45,11 @@ def base_scenario(spec: SweepSpec) -> Scenario:
     """The sweep's base scenario (loaded once per process)."""
     key = spec.digest()
     if key not in _BASES:
-        _BASES[key] = scenario_from_dict(copy.deepcopy(spec.scenario_data),
-                                         source=spec.scenario_path,
-                                         name=spec.scenario_path.stem)
+        with warnings.catch_warnings():  # shown once, when the sweep file was read
+            warnings.simplefilter("ignore", ScenarioWarning)
+            _BASES[key] = scenario_from_dict(copy.deepcopy(spec.scenario_data),
+                                             source=spec.scenario_path,
+                                             name=spec.scenario_path.stem)
     return _BASES[key]
 
 
@@ -129,7 +133,11 @@ def realise(spec: SweepSpec, parameters: dict[str, Any], seed: int) -> Scenario:
     _current(data, _values(parameters, "current"))
     _sensors(data, _values(parameters, "sensors"), seed)
     _payload(data, _values(parameters, "payload"))
-    scenario = scenario_from_dict(data, source=spec.scenario_path, name=base.name)
+    with warnings.catch_warnings():
+        # the base scenario's warnings were shown when the sweep file was read; a perturbed
+        # start away from the tool's path is what the sweep asks for, not a mistake to flag
+        warnings.simplefilter("ignore", ScenarioWarning)
+        scenario = scenario_from_dict(data, source=spec.scenario_path, name=base.name)
     if spec.duration is not None:
         scenario = scenario.with_duration(spec.duration)
     factors = plant_factors(parameters)

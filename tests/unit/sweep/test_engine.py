@@ -9,7 +9,7 @@ import pytest
 import uvms_qp.sweep.executors as executors
 import uvms_qp.sweep.records as records_module
 from uvms_qp.errors import ConfigError
-from uvms_qp.sweep import Pool, RunTask, run_one, run_sweep, simulate_run
+from uvms_qp.sweep import Pool, RunTask, run_one, run_seed, run_sweep, simulate_run
 from uvms_qp.sweep.outcome import run_outcome
 from uvms_qp.testing.sweep_faults import AlwaysKill, KillOnce
 
@@ -142,3 +142,14 @@ def test_another_sweep_in_the_same_folder_is_refused(reference, tiny, tmp_path):
 def test_bad_worker_counts_are_refused():
     with pytest.raises(ConfigError, match=r"^--workers: expected a positive integer, got 0"):
         Pool(workers=0)
+
+
+def test_a_perturbed_start_does_not_warn_for_every_run(tiny):
+    import warnings
+
+    from uvms_qp.errors import ScenarioWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ScenarioWarning)
+        for index in range(3):  # initial.joints moves the tool off its path's start
+            simulate_run(tiny, run_seed(tiny.seed, index))
