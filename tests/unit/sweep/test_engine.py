@@ -151,5 +151,5 @@ def test_a_perturbed_start_does_not_warn_for_every_run(tiny):
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", ScenarioWarning)
-        for index in range(3):  # initial.joints moves the tool off its path's start
-            simulate_run(tiny, run_seed(tiny.seed, index))
+        # run 4 starts with the tool 1.4 cm off its path: the base scenario would warn
+        simulate_run(tiny, run_seed(tiny.seed, 4))
