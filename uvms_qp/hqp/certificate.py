@@ -87,7 +87,7 @@ import numpy as np
 from .._validation import FloatArray
 from .backends.daqp_binding import DaqpBinding, open_daqp
 from .kkt import active_set
-from .linalg import nnls
+from .linalg import nnls, one_blas_thread
 from .problem import Problem
 
 #: Verdicts of one level.
@@ -530,7 +530,8 @@ class Certifier:
                     k = unmet[i]
                     out[k] = LevelCertificate(k, LATE, residuals[k], math.inf, math.inf)
                 return out
-            self._active(problem, work, s, residuals, unmet, rest, sizes, scales, out)
+            with one_blas_thread:
+                self._active(problem, work, s, residuals, unmet, rest, sizes, scales, out)
         return out
 
     def _active(self, problem: Problem, work: _Work, s: FloatArray, residuals: list[float],
@@ -721,11 +722,12 @@ def certify(problem: Problem, x: FloatArray, s: FloatArray | None = None,
         return cert
     x = np.asarray(x, dtype=np.float64)
     levels = []
-    for c in cert.levels:
-        if not c.ok and c.verdict != ILL_POSED:
-            scale = problem.level_scale(c.level)
-            c = _settle(problem, x, c, opt_tol, scale, deadline)
-        levels.append(c)
+    with one_blas_thread:
+        for c in cert.levels:
+            if not c.ok and c.verdict != ILL_POSED:
+                scale = problem.level_scale(c.level)
+                c = _settle(problem, x, c, opt_tol, scale, deadline)
+            levels.append(c)
     return Certificate(tuple(levels), cert.hard_violation, cert.inside)
 
 
@@ -877,8 +879,15 @@ def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = No
         The :class:`Repair`: ``repaired`` True with a certified ``x``, or the input ``x`` with
         its certificate and a message saying why it could not be repaired.
     """
-    x = np.asarray(x, dtype=np.float64)
-    certifier = certifier or Certifier()
+    with one_blas_thread:
+        return _repair(problem, np.asarray(x, dtype=np.float64), certificate,
+                       certifier or Certifier(), deadline, clock)
+
+
+def _repair(problem: Problem, x: FloatArray, certificate: Certificate | None,
+            certifier: Certifier, deadline: float | None, clock: Callable[[], float]
+            ) -> Repair:
+    """:func:`repair` on one BLAS thread."""
     level_tol = certifier.level_tol
     cert = certificate or certifier(problem, x)
     if cert.ok:

@@ -79,6 +79,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from .._validation import FloatArray
+from .linalg import one_blas_thread
 from .problem import Problem
 
 _GESDD = lapack.dgesdd
@@ -199,7 +200,8 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     slack = _add(_minimum(setup.below, 0.0), _maximum(setup.above, 0.0))
     if clock() > end:
         return None
-    return _examine(problem, setup, x, active, slack, hard, y_norm, end, clock)
+    with one_blas_thread:
+        return _examine(problem, setup, x, active, slack, hard, y_norm, end, clock)
 
 
 def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
