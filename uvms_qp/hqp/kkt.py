@@ -32,8 +32,11 @@ from .linalg import nnls
 FEAS_TOL = 1e-10
 #: relative slack below which a constraint counts as tight (may carry a multiplier)
 TIGHT_TOL = 1e-9
-#: stationarity residual allowed, relative to ``max(1, |P z|, |q|, |C_J' nu|)``
+#: stationarity residual allowed, relative to ``max(|P z|, |q|, |C_J' nu|, ROUND_OFF |P| |z|)``
 STAT_TOL = 1e-9
+#: the least scale of the stationarity test, relative to ``|P| |z|`` (the size of the terms that
+#: make up ``P z``, whose round-off the test must tolerate when they cancel)
+ROUND_OFF = 1e-3
 #: relative activity thresholds tried when sharpening an inexact answer
 ACTIVE_TOLS = (1e-9, 1e-7, 1e-6, 1e-5, 1e-4)
 
@@ -103,8 +106,11 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
         reach = float(np.abs(C.T @ nu).max())
     else:
         nu, r, reach = np.zeros(0), g, 0.0
-    scale = max(1.0, float(np.abs(P @ z).max(initial=0.0)), float(np.abs(q).max(initial=0.0)),
-                reach)
+    # relative to the gradient's own terms (no floor at 1: a QP in other units is judged
+    # alike), and never below what round-off leaves of ``P z`` (``ROUND_OFF |P| |z|``)
+    scale = max(ROUND_OFF * float(np.abs(P).max(initial=0.0)) * float(np.abs(z).max(
+        initial=0.0)), float(np.abs(P @ z).max(initial=0.0)), float(np.abs(q).max(initial=0.0)),
+                reach) or 1.0
     stat = float(np.abs(r).max(initial=0.0)) / scale
     if not np.isfinite(stat) or stat > STAT_TOL:
         return None

@@ -24,13 +24,17 @@ removes the bias at once); inexact back-ends' answers are sharpened and certifie
 
 Degenerate data, by design:
 
+* each level's objective is divided by its Hessian's largest diagonal entry (the same minimiser),
+  so that a level whose rows and targets are 1e5 (or 1e-5) reaches the back-end, its
+  regularisation and the KKT check of :mod:`uvms_qp.hqp.kkt` at the scale 1;
 * every inequality row handed to a back-end (box and hard rows in the reduced space, frozen rows,
   the level's rows with their slacks) is scaled to unit norm in x (a slack ``t_i`` of a scaled
   row carries the weight ``w_i |a_i|^2``): row norms spread over 1e-3..1e3 reach the back-end as
   rows of norm 1;
 * an equality row whose projection on the freedom left is below ``rank_tol |a_i|`` is a constant
   of the level (its value is fixed by the levels above) and is left out of its QP, and so is a
-  row whose norm is below ``ZTOL`` of the problem's largest (a zero or tiny row); the rank of
+  row whose norm is below ``ZTOL`` of the problem's largest (a zero or tiny row: it pins no
+  direction for the levels below either); the rank of
   the rows frozen into ``Z`` is decided against their unprojected norms, so round-off left by a
   projection never becomes a direction;
 * the end of the solve (``end``, a reading of ``clock``: the solver's, which a safe solver sets
@@ -401,7 +405,8 @@ class CascadeBackend:
                                                         level.lower[ineq], 0.0)))
                 frozen.append((level.A[ineq], level.lower[ineq] - v[ineq] - scale,
                                level.upper[ineq] + v[ineq] + scale))
-            pinned = np.vstack((level.A[eq], active))
+            # (a row the level's QP left out as a constant pins no direction either)
+            pinned = np.vstack((level.A[eq & (_row_norms(level.A) > ZTOL * self._big)], active))
             if pinned.shape[0] and Z.shape[1]:
                 ref = float(_row_norms(pinned).max(initial=0.0))
                 N, _ = _null_space(pinned @ Z, self.rank_tol, ref)
@@ -447,6 +452,13 @@ class CascadeBackend:
         ni = np.where(norms[ineq] > 0.0, norms[ineq], 1.0)
         if q_t:
             P[p:, p:] = np.diag(w[ineq] * ni * ni)
+        # the level's objective in its own units: divided by its Hessian's largest diagonal
+        # entry (the same minimiser; a level of rows 1e5 or 1e-5 reaches the QP at the scale 1)
+        unit = float(np.abs(np.diag(P)).max(initial=0.0))
+        if unit > 0.0:
+            P /= unit
+            q /= unit
+            floor /= unit
         rows, lb, ub = self._constraints(problem, xp, Z, width, frozen)
         if q_t:
             Ci = np.hstack((level.A[ineq] @ Z, np.diag(ni)))
