@@ -36,6 +36,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..hqp import HierarchySolver, Problem, available_solvers
+from ..hqp.backends.daqp_binding import open_daqp
 from ..hqp.certificate import Certifier, repair
 from ..hqp.damping import level_damping
 
@@ -185,7 +186,7 @@ def run_case(case: Case, solvers: dict[str, Any], budget: float = BUDGET
     except Exception as exc:
         out["solve"] = "raised " + type(exc).__name__
     times["solve"] = (clock() - began, cpu() - used)
-    certifier = Certifier()
+    certifier = Certifier(open_daqp)
     began, used = clock(), cpu()
     certifier.end = began + budget
     try:
