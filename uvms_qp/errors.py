@@ -119,3 +119,60 @@ class SolverError(UvmsQpError):
 
 class NoSolutionFound(SolverError):
     """No verified solution could be produced; ``result`` keeps the failed problem."""
+
+
+class ParameterError(ConfigError):
+    """A physical parameter of a plant is invalid (negative mass, indefinite matrix, bad shape).
+
+    Attributes:
+        path: Key path of the parameter, e.g. ``vehicle.added_mass`` or ``links.axis_b.mass``.
+        reason: The problem, without the file and path.
+        file: The parameter file it was read from, or None.
+        value: The offending value (as given), or None.
+    """
+
+    def __init__(self, message: str, path: str = "", *, file: str | None = None,
+                 value: Any = None) -> None:
+        self.reason = message
+        self.file = file
+        self.value = value
+        where = f"{path}: {message}" if path else message
+        if file is not None:
+            where = f"{file}: {where}"
+        super().__init__(message, path)
+        self.args = (where,)
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class UnknownParameterSetError(UnknownNameError):
+    """A bundled plant parameter set name does not exist."""
+
+    def __init__(self, name: Any, known: Iterable[str]) -> None:
+        super().__init__("plant parameter set", name, known)
+
+
+class PlantDataError(ModelError, LookupError):
+    """A model lacks what a dynamic plant needs (no parameter set, a joint without a link body).
+
+    The message names what is missing and how to provide it.
+    """
+
+
+class SimulationDiverged(UvmsQpError, ArithmeticError):
+    """A physics step produced a non-finite state or a velocity beyond the plant's sanity bound.
+
+    Attributes:
+        t: Time at the start of the failed step [s].
+        q: Configuration at the start of the failed step.
+        v: Generalized velocity at the start of the failed step.
+        reason: What was found (which entry, its value, the bound).
+    """
+
+    def __init__(self, message: str, *, t: float, q: Any, v: Any, reason: str) -> None:
+        self.t = t
+        self.q = q
+        self.v = v
+        self.reason = reason
+        super().__init__(message)

@@ -28,6 +28,35 @@ if TYPE_CHECKING:  # pragma: no cover
     from .model import Model
 
 
+#: Default duration of an activation ramp from 0 to 1 [s] (:meth:`Stack.set_activation`).
+DEFAULT_RAMP = 1.0
+
+
+def as_activation(value: Any, name: str) -> float:
+    """Validate an activation: a number in [0, 1]."""
+    a = as_scalar(value, name, nonnegative=True)
+    if a > 1.0:
+        raise InputError(f"{name}: expected an activation in [0, 1], got {a:g}")
+    return a
+
+
+class Entry:
+    """A task's entry in a stack: its requested activation and ramp duration.
+
+    Attributes:
+        activation: The requested activation in [0, 1].
+        ramp: Duration of a ramp from 0 to 1 [s].
+        serial: Counts the requests (a controller starts a ramp when it moved).
+    """
+
+    __slots__ = ("activation", "ramp", "serial")
+
+    def __init__(self) -> None:
+        self.activation = 1.0
+        self.ramp = DEFAULT_RAMP
+        self.serial = 0
+
+
 class Level:
     """One priority level: tasks whose rows are traded off by their weights.
 
@@ -89,10 +118,16 @@ class Stack:
     Validated at construction (non-empty levels, unique task names, types) and at
     :meth:`bind` (frames, joints, axes and dimensions against the model).
 
-    A stack drives one controller: its tasks and constraints keep run-time memory (activation
-    ramps, held targets, the previous command of a command-rate bound), so a controller built
-    on it takes them over (their ``owner``) and a controller built earlier on any of them
-    refuses to step afterwards. Give every controller its own stack (:meth:`copy`).
+    A stack is a description: its tasks and constraints keep no run-time memory (each
+    controller keeps its own, see :class:`~uvms_qp.tasks.TaskSlot`), so any number of
+    controllers may share it and each steps as it would on its own copy. A change to a task
+    (``task.update(...)``, :meth:`set_activation`) reaches every controller built on the stack.
+
+    Each task has an entry in the stack: its requested activation in [0, 1] (1: in the stack,
+    0: out of it, in between: the commands with and without it blended, as in the continuous
+    activation of Mansard, Khatib and Kheddar, IEEE Trans. Robotics 2009) and the duration of
+    the ramp that takes a controller to a new request (:meth:`set_activation`), as TSID's
+    formulation owns a task's priority, weight and transition duration.
 
     Args:
         levels: Levels in descending priority; a plain list of tasks is accepted as a level.
@@ -141,18 +176,56 @@ class Stack:
         self.levels: tuple[Level, ...] = tuple(built)
         self.constraints: tuple[Constraint, ...] = tuple(constraints)
         self.model: Model | None = None
+        self.entries: dict[str, Entry] = {task.name: Entry() for task in self.tasks}
+        self.requests = 0  # counts the activation requests (a controller looks when it moved)
 
     def copy(self) -> Stack:
-        """A copy with its own tasks and constraints (for another controller).
+        """A copy with its own tasks, constraints and entries (the model is shared).
 
-        Everything is copied, the run-time memory of the tasks and constraints included, except
-        the model (shared); the copy's tasks and constraints have no owner.
+        Events and updates applied to the copy leave this stack as it is.
         """
-        parts = (*self.tasks, *self.constraints)
-        memo: dict[int, Any] = {id(m): m for m in (self.model, *(p.model for p in parts))
-                                if m is not None}
-        memo.update((id(p.owner), None) for p in parts)
-        return copy.deepcopy(self, memo)
+        return copy.deepcopy(self)
+
+    def set_activation(self, name: str, activation: float | None = None, *,
+                       ramp: float | None = None) -> None:
+        """Ask for task ``name`` to be in the stack (1), out of it (0), or in between.
+
+        Every controller on the stack ramps its activation from where it is to ``activation``
+        over ``ramp * |change|`` seconds from its next step, with a smoothstep
+        ``3 s^2 - 2 s^3`` (zero slope at both ends), so inserting or removing a task does not
+        step the command; a controller built later starts at the requested value. A task
+        entering the stack (from 0) starts afresh: a held target is taken then. Scenario files:
+        ``activation`` in a task's table, an event ``update = { activation = 1.0, ramp = 2.0 }``.
+
+        Args:
+            name: The task.
+            activation: The requested activation in [0, 1] (None: leave it).
+            ramp: Duration of a ramp from 0 to 1 [s], kept for later requests (0: a step;
+                default 1 s).
+
+        Raises:
+            InputError: an unknown task, an activation outside [0, 1], a negative ramp (nothing
+                is changed then).
+        """
+        entry = self._entry(name)
+        a = None if activation is None else as_activation(activation, f"{name}.activation")
+        r = None if ramp is None else as_scalar(ramp, f"{name}.ramp", nonnegative=True)
+        if r is not None:
+            entry.ramp = r
+        if a is not None:
+            entry.activation = a
+            entry.serial += 1
+            self.requests += 1
+
+    def activation(self, name: str) -> float:
+        """The activation requested for task ``name`` (see :meth:`set_activation`)."""
+        return self._entry(name).activation
+
+    def _entry(self, name: str) -> Entry:
+        entry = self.entries.get(name)
+        if entry is None:
+            self.task(name)  # raises, listing the known tasks
+        return entry  # type: ignore[return-value]
 
     @property
     def tasks(self) -> tuple[Task, ...]:
@@ -208,17 +281,10 @@ class Stack:
         for k, level in enumerate(self.levels):
             for i, task in enumerate(level.tasks):
                 try:
-                    task.set_period(dt)
+                    task.check_period(dt)
                 except InputError as exc:
                     exc.args = (f"levels[{k}].tasks[{i}] ({task.name}): {exc}", *exc.args[1:])
                     raise
-
-    def reset(self) -> None:
-        """Reset every task's and constraint's run-time memory."""
-        for t in self.tasks:
-            t.reset()
-        for c in self.constraints:
-            c.reset()
 
     def describe(self) -> str:
         """A readable listing of levels, tasks and constraints."""

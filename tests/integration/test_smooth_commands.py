@@ -125,7 +125,7 @@ class _RateTask(Task):
     def _bind(self, model):
         return 3
 
-    def evaluate(self, state, t):
+    def evaluate(self, state, t, slot):
         return state.jacobian("tool", "position"), self.rate, self.rate
 
 
@@ -297,16 +297,17 @@ def _posture_run(ramp, steps=100, insert=40):
     model = uvms_qp.load_model("bluerov2_heavy_alpha5")
     q = model.home()
     goal = model.frame_pose(q, "tool")[:3, 3] + [0.1, 0.05, 0.0]
-    posture = PostureTask(posture=[2.6, 1.3, 1.3, 2.6], gain=1.0, activation=0.0)
+    posture = PostureTask(posture=[2.6, 1.3, 1.3, 2.6], gain=1.0)
     stack = Stack(constraints=[JointPositionBounds(), JointVelocityBounds(),
                                VehicleRateBounds(linear=0.5, angular=0.3)],
                   levels=[Level(EndEffectorTask("tool", position=goal, gain=2.0)),
                           Level(posture), Level(StationKeepingTask(gain=1.0))])
+    stack.set_activation("posture", 0.0)
     controller = Controller(model, stack, dt=DT)
     commands, results = [], []
     for k in range(steps):
         if k == insert:
-            posture.update(activation=1.0, ramp=ramp)
+            stack.set_activation("posture", 1.0, ramp=ramp)
         result = controller.step(model.state(q), t=k * DT)
         commands.append(result.zeta.copy())
         results.append(result)
@@ -341,7 +342,7 @@ def test_a_task_ramped_out_leaves_without_a_step():
     commands = []
     for k in range(60):
         if k == 20:
-            posture.update(activation=0.0, ramp=1.0)
+            stack.set_activation("posture", 0.0, ramp=1.0)
         result = controller.step(model.state(q), t=k * DT)
         commands.append(result.zeta.copy())
         q = model.integrate(q, result.zeta, DT)
@@ -467,19 +468,29 @@ def test_a_tracking_gain_that_never_settles_is_refused(task):
 
 
 def test_a_gain_updated_at_run_time_is_checked_against_the_period():
-    """``update(gain=...)`` once the controller is built: refused like the constructor's gain,
-    and the task left as it was (all or nothing)."""
+    """``update(gain=...)`` once the controller is built: the controller's next step refuses it
+    like the constructor's gain (a task serves any number of controllers, each with its own
+    period), until the gain is one that settles; an invalid update leaves the task as it was."""
     model = dh_arm()
     tool = EndEffectorTask("tool", position=[0.5, 0.0, 0.2], gain=2.0)
     floor = ManipulabilityTask(mode="floor", minimum=0.001, gain=1.0)
-    Controller(model, Stack(levels=[Level(floor), Level(tool)]), dt=DT)
-    with pytest.raises(InputError, match=r"end_effector\.gain: gain \* dt = 40 \* 0.05 = 2 >= 2"):
-        tool.update(gain=40.0, weight=3.0)
-    assert tool.gain == 2.0 and tool.weight == 1.0
-    with pytest.raises(InputError, match=r"manipulability\.gain: gain \* dt = 30 \* 0.05"):
-        floor.update(gain=30.0)
-    assert floor.gain == 1.0
+    controller = Controller(model, Stack(levels=[Level(floor), Level(tool)]), dt=DT)
+    state = model.state(model.home())
+    controller.step(state, 0.0)
+    tool.update(gain=40.0, weight=3.0)
+    with pytest.raises(InputError, match=r"task 'tool' updated: tool\.gain: gain \* dt = 40 "
+                                         r"\* 0.05 = 2 >= 2"):
+        controller.step(state, DT)
+    with pytest.raises(InputError, match="gain"):
+        controller.step(state, DT)  # refused at every step until the gain settles
     tool.update(gain=30.0)  # overshoots, but settles: accepted
+    controller.step(state, DT)
+    floor.update(gain=30.0)
+    with pytest.raises(InputError, match=r"manipulability\.gain: gain \* dt = 30 \* 0.05"):
+        controller.step(state, 2 * DT)
+    with pytest.raises(InputError, match="gain"):
+        floor.update(gain=-1.0, minimum=0.002)
+    assert floor.gain == 30.0 and floor.minimum == 0.001  # all or nothing
 
 
 def test_a_tracking_gain_that_overshoots_reverses_the_command_every_period():
@@ -493,7 +504,7 @@ def test_a_tracking_gain_that_overshoots_reverses_the_command_every_period():
         stack = Stack(levels=[Level(EndEffectorTask("tool", position=goal, gain=gain))],
                       constraints=[JointVelocityBounds()])
         commands, results, _ = run(model, stack, model.home(), 80)
-        errors[gain] = [r.task_errors["end_effector"][0] for r in results]
+        errors[gain] = [r.task_errors["tool"][0] for r in results]
         flips = command_reversals(commands[:, model.n_vehicle:], rates).max()
         assert (flips == 0) if gain == 20.0 else (flips >= 10)
     assert errors[20.0][3] < 1e-9  # dead-beat: there in one period (and round-off)

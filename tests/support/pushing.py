@@ -30,5 +30,5 @@ class JointRateTask(Task):
         self._A[np.arange(n), model.n_vehicle + np.arange(n)] = 1.0
         return n
 
-    def evaluate(self, state, t):
+    def evaluate(self, state, t, slot):
         return self._A, self.rates, self.rates

@@ -39,7 +39,7 @@ PACKAGE = "uvms_qp"
 LAYERS: dict[str, int | None] = {
     "errors": 0, "_validation": 0, "rows": 0, "analytic": 0,
     "model": 1,
-    "tasks": 2, "constraints": 2,
+    "tasks": 2, "constraints": 2, "dynamics": 2,
     "stack": 3, "hqp": 3,
     "safety": 4,
     "controller": 5,
@@ -56,6 +56,7 @@ LAYER0_ORDER = ("errors", "_validation", "rows", "analytic")
 
 #: Packages that know less than every layer above them.
 KNOWS_ONLY: dict[str, frozenset[str]] = {
+    "dynamics": frozenset({*LAYER0_ORDER, "model"}),
     "hqp": frozenset(LAYER0_ORDER),
     "safety": frozenset({*LAYER0_ORDER, "hqp"}),
 }

@@ -47,7 +47,7 @@ from ..stack import Level, Stack
 from ..tasks import (
     CurrentAlignmentTask,
     EndEffectorTask,
-    JointLimitTask,
+    JointLimitMarginTask,
     PostureTask,
     StationKeepingTask,
     VehicleMotionTask,
@@ -352,7 +352,7 @@ def controller_stack(name: str, target: list[float]) -> Any:
     if name == "shared_joint":
         return Stack(levels=[
             Level(EndEffectorTask(position=target, gain=2.0)),
-            Level(JointLimitTask(mode="margin", margin=0.1, gain=2.0)),  # joint-rate rows
+            Level(JointLimitMarginTask(margin=0.1, gain=2.0)),  # joint-rate rows
             Level(PostureTask(gain=0.2)),  # the same joint-rate rows
         ], constraints=bounds)
     return demo_stack(position=target)

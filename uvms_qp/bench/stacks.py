@@ -28,9 +28,12 @@ from ..stack import Level, Stack
 from ..tasks import (
     CurrentAlignmentTask,
     EndEffectorTask,
-    JointLimitTask,
-    ManipulabilityTask,
-    PayloadMomentTask,
+    JointLimitGradientTask,
+    JointLimitMarginTask,
+    ManipulabilityAscendTask,
+    ManipulabilityFloorTask,
+    PayloadMomentBoundTask,
+    PayloadMomentReduceTask,
     PostureTask,
     StationKeepingTask,
     VehicleAttitudeTask,
@@ -65,9 +68,9 @@ def demo_stack(*, trajectory: Any = None, position: list[float] | None = None) -
     return Stack(
         levels=[
             Level(tool),
-            Level(ManipulabilityTask(mode="floor", minimum=0.002, gain=2.0),
-                  JointLimitTask(mode="margin", margin=0.1, gain=2.0)),
-            Level(PayloadMomentTask(force=10.0, gain=0.5), StationKeepingTask(gain=1.0),
+            Level(ManipulabilityFloorTask(minimum=0.002, gain=2.0),
+                  JointLimitMarginTask(margin=0.1, gain=2.0)),
+            Level(PayloadMomentReduceTask(force=10.0, gain=0.5), StationKeepingTask(gain=1.0),
                   CurrentAlignmentTask(heading=0.78, gain=0.5)),
             Level(VehicleMotionTask(beta=0.8), PostureTask(gain=0.2)),
         ],
@@ -149,21 +152,22 @@ def random_stack(model: Any, state: Any, rng: np.random.Generator,
                                                  "tool")[:3, :3].tolist()
     pool: list[Any] = [EndEffectorTask(mode=mode, gain=float(rng.uniform(0.5, 3.0)),
                                        **ee_kwargs)]
-    probe = ManipulabilityTask(mode="ascend")
+    probe = ManipulabilityAscendTask()
     probe.bind(model)
     w0 = float(probe.compute_value(state)[0])
     if rng.uniform() < 0.5:
-        pool.append(ManipulabilityTask(mode="floor", minimum=w0 * float(rng.uniform(0.5, 1.5)),
-                                       gain=float(rng.uniform(1.0, 10.0))))
+        pool.append(ManipulabilityFloorTask(minimum=w0 * float(rng.uniform(0.5, 1.5)),
+                                            gain=float(rng.uniform(1.0, 10.0))))
     else:
-        pool.append(ManipulabilityTask(mode="ascend", gain=float(rng.uniform(0.1, 1.0))))
+        pool.append(ManipulabilityAscendTask(gain=float(rng.uniform(0.1, 1.0))))
     if bounded:
         gradient = rng.uniform() >= 0.6
-        pool.append(JointLimitTask(mode="gradient" if gradient else "margin",
-                                   margin=0.05, gain=2.0))
-    pool.append(PayloadMomentTask(mode="bound" if rng.uniform() < 0.5 else "reduce",
-                                  force=float(rng.uniform(5.0, 30.0)),
-                                  maximum=float(rng.uniform(0.0, 2.0)), gain=1.0))
+        pool.append(JointLimitGradientTask(gain=2.0) if gradient
+                    else JointLimitMarginTask(margin=0.05, gain=2.0))
+    bound = rng.uniform() < 0.5
+    force, maximum = float(rng.uniform(5.0, 30.0)), float(rng.uniform(0.0, 2.0))
+    pool.append(PayloadMomentBoundTask(force=force, maximum=maximum, gain=1.0) if bound
+                else PayloadMomentReduceTask(force=force, gain=1.0))
     if vehicle:
         pool.append(StationKeepingTask(gain=1.0, weight=float(rng.uniform(0.5, 2.0))))
         if "r" in model.actuated:

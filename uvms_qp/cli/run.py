@@ -24,6 +24,10 @@ def _options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solver", help="override the scenario's solver (e.g. cascade:osqp)")
     parser.add_argument("--duration", type=float,
                         help="override the simulated time [s] (at least one control period)")
+    parser.add_argument("--plant", choices=("kinematic", "dynamic"),
+                        help="override the scenario's plant: 'dynamic' runs the controller on a "
+                             "floating vehicle (thrusters, hydrodynamics, the arm's reaction) "
+                             "and reports it next to the kinematic run")
     parser.add_argument("--view", metavar="HTML",
                         help="also write a 3-D animation of the run as one self-contained HTML "
                              "file (needs plotly: pip install 'uvms-qp[view]')")
@@ -77,6 +81,40 @@ def _summary(metrics: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+#: Metrics of a dynamic run printed next to the kinematic run's: (key, unit).
+DYNAMIC_KEYS = (
+    ("ee_error_rms", "m"),
+    ("ee_error_max", "m"),
+    ("ee_error_final", "m"),
+    ("bound_violation_max", ""),
+    ("roll_max", "rad"),
+    ("pitch_max", "rad"),
+    ("saturation_share_max", ""),
+    ("energy", "J"),
+    ("unmet_wrench_max", "N, N m"),
+)
+
+
+def dynamic_summary(dynamic: dict[str, Any], kinematic: dict[str, Any]) -> str:
+    """The dynamic run's metrics beside the kinematic run's, then the per-axis and per-part ones."""
+    lines = [f"  {'on the floating vehicle':<28} {'dynamic':>12} {'kinematic':>12}"]
+    for key, unit in DYNAMIC_KEYS:
+        if key not in dynamic and key not in kinematic:
+            continue
+        cells = []
+        for metrics in (dynamic, kinematic):
+            value = metrics.get(key)
+            cells.append("-" if value is None else f"{value:.4g}")
+        lines.append(f"  {key:<28} {cells[0]:>12} {cells[1]:>12} {unit}".rstrip())
+    for key, unit in (("velocity_tracking_error_rms", "m/s, rad/s"), ("thrust_max", "N"),
+                      ("saturation_share", ""), ("joint_torque_max", "N m")):
+        values = dynamic.get(key)
+        if values:
+            text = ", ".join(f"{name} {value:.3g}" for name, value in values.items())
+            lines.append(f"  {key:<28} {text} {unit}".rstrip())
+    return "\n".join(lines)
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, validate, simulate; write ``results.json`` and the figures into ``args.out``."""
     from ..sim.plots import plot_results
@@ -89,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario)
     if args.duration is not None:
         scenario = scenario.with_duration(args.duration, "--duration")
+    if args.plant is not None:
+        scenario = scenario.with_plant(args.plant, "--plant")
     if args.view and not plotly_available():
         raise ConfigError(f"the 3-D view needs plotly: {INSTALL_HINT}", "--view")
     try:
@@ -99,8 +139,13 @@ def run(args: argparse.Namespace) -> int:
         result = simulate(scenario, scheme, progress=not args.quiet)
         if args.solver:
             result.solver = args.solver
+        reference = None
+        if result.plant == "dynamic":
+            kinematic = scenario.with_plant("kinematic")
+            reference = simulate(kinematic, kinematic.make_controller(args.solver)
+                                 if args.solver else None)
         with writing_output(args.out):
-            path = write_results(result, args.out)
+            path = write_results(result, args.out, reference=reference)
             figures = [] if args.no_plots else plot_results(result, args.out,
                                                             progress=not args.quiet)
         if args.view:
@@ -119,6 +164,13 @@ def run(args: argparse.Namespace) -> int:
             print(f"note: {scenario.duration:g} s is not a whole number of control periods; "
                   f"ran the nearest, {simulated:g} s")
         print(_summary(result.metrics()))
+        if reference is not None:
+            print(dynamic_summary(result.metrics(), reference.metrics()))
+    if result.stopped is not None:
+        stop = result.stopped
+        print(f"error: the run stopped at t = {stop['time']:g} s: {stop['error']}; "
+              f"{path} holds the {result.steps} steps before it", file=sys.stderr)
+        return 1
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
     return 0

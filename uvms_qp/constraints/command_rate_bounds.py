@@ -34,6 +34,16 @@ _LINEAR = ("u", "v", "w")
 DEFAULT_RAMP = 0.5
 
 
+class _Window:
+    """The previous command (a buffer (nv,)), or None for a free first step."""
+
+    __slots__ = ("buffer", "previous")
+
+    def __init__(self) -> None:
+        self.buffer = np.zeros(0)
+        self.previous: FloatArray | None = None
+
+
 class CommandRateBounds(Constraint):
     r"""Hard bounds on the change of the command per period, ``|zeta_k - zeta_{k-1}| <= a dt``.
 
@@ -101,8 +111,7 @@ class CommandRateBounds(Constraint):
         self.limits = np.zeros(0)
         self._cols = np.zeros(0, dtype=np.intp)
         self._lim = np.zeros(0)
-        self._previous: FloatArray | None = None
-        self._buffer = np.zeros(0)
+        self._own = _Window()
 
     def _positive(self, value: Any, key: str) -> Any:
         if np.any(np.asarray(value) <= 0.0):
@@ -137,41 +146,51 @@ class CommandRateBounds(Constraint):
         self.limits = lim
         self._cols = np.flatnonzero(finite)
         self._lim = lim[finite]
-        self._buffer = np.zeros(nv)
         self.model = model  # reset() reads the size
         self.reset()
         return 0
 
     # ----------------------------------------------------------------------------- run-time hooks
-    def reset(self) -> None:
+    def memory(self) -> _Window:
+        """A new memory of the previous command (one per controller), at ``initial``."""
+        window = _Window()
+        self.reset(window)
+        return window
+
+    def reset(self, memory: Any = None) -> None:
         """Start again from ``initial`` (the previous command of the next step)."""
+        window: _Window = self._own if memory is None else memory
         if self.model is None:
             return
+        window.buffer = np.zeros(self.model.nv)
         if isinstance(self._initial_arg, str):
-            self._buffer[:] = 0.0
-            self._previous = None if self._initial_arg == "free" else self._buffer
+            window.previous = None if self._initial_arg == "free" else window.buffer
         else:
-            self._buffer[:] = self._initial_arg
-            self._previous = self._buffer
+            window.buffer[:] = self._initial_arg
+            window.previous = window.buffer
 
-    def command_sent(self, zeta: FloatArray) -> None:
+    def command_sent(self, zeta: FloatArray, memory: Any = None) -> None:
         """Remember ``zeta`` (nv,) [m/s, rad/s], the command sent this period."""
-        self._buffer[:] = zeta
-        self._previous = self._buffer
+        window: _Window = self._own if memory is None else memory
+        window.buffer[:] = zeta
+        window.previous = window.buffer
 
     @property
     def previous(self) -> FloatArray | None:
-        """The previous command the next step is bounded around (a copy), or None (free)."""
-        return None if self._previous is None else self._previous.copy()
+        """The previous command of the constraint's own memory (a copy), or None (free)."""
+        previous = self._own.previous
+        return None if previous is None else previous.copy()
 
     # ------------------------------------------------------------------------------------- box
-    def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray) -> None:
+    def fill_box(self, state: State, dt: float, lower: FloatArray, upper: FloatArray,
+                 memory: Any = None) -> None:
         """Clip the window ``previous +/- a dt`` into the box and make it the box.
 
         Called after every other box: where the window misses the box, the box's nearest
-        point is kept (position safety first); an already empty box stays empty.
+        point is kept (position safety first); an already empty box stays empty. ``memory``:
+        the controller's (default the constraint's own).
         """
-        previous = self._previous
+        previous = (self._own if memory is None else memory).previous
         if previous is None:
             return
         cols = self._cols

@@ -6,8 +6,12 @@ their bounds into the controller's box (:meth:`Constraint.fill_box`); row constr
 rows ``lower <= A zeta <= upper`` (:meth:`Constraint.fill_rows`). Both hold at every level of the
 hierarchy and with every back-end.
 
-A constraint with memory (the command-rate bounds) learns the command the controller sent through
-:meth:`Constraint.command_sent`, and forgets it in :meth:`Constraint.reset`. A box that
+A constraint with memory (the command-rate bounds) keeps it in a memory object
+(:meth:`Constraint.memory`): each controller makes its own and passes it to
+:meth:`Constraint.fill_box`, :meth:`Constraint.command_sent` (the command the controller sent) and
+:meth:`Constraint.reset`; without one, the constraint uses its own (a run that tells it the
+commands itself, :func:`uvms_qp.sim.simulate`). The constraint is a description, so any number of
+controllers may share it. A box that
 :attr:`Constraint.yields` is intersected after the others and clipped into them
 (:func:`intersect_boxes`): it never empties the box.
 """
@@ -39,8 +43,6 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
         name: Name used in diagnostics.
         model: Bound model or None.
         rows_dim: Number of hard rows (0 for a pure box constraint).
-        owner: What fills the constraint every tick (the stack assembler of the last controller
-            built on it), or None: a constraint serves one controller.
     """
 
     type_name: ClassVar[str] = "constraint"
@@ -57,7 +59,6 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
             raise InputError(f"name: expected a non-empty string, got {name!r}")
         self.name = name or self.type_name
         self.model: Model | None = None
-        self.owner: Any = None
         self.rows_dim = 0
 
     def bind(self, model: Model) -> Constraint:
@@ -87,14 +88,19 @@ class Constraint(ABC):  # noqa: B024 - a constraint overrides fill_box and/or fi
         """Write the hard rows into ``A`` (rows_dim, nv), ``lower``, ``upper``."""
 
     # ------------------------------------------------------------------------------ run-time hooks
-    def command_sent(self, zeta: FloatArray) -> None:  # noqa: B027 - optional hook
+    def memory(self) -> Any:
+        """A new run-time memory for one controller, or None for a constraint without memory."""
+        return None
+
+    def command_sent(self, zeta: FloatArray, memory: Any = None) -> None:  # noqa: B027
         """The command ``zeta`` (nv,) the controller returned this period (called every step).
 
-        Constraints with memory (the command-rate bounds) keep it; the others ignore it.
+        Constraints with memory (the command-rate bounds) keep it in ``memory`` (default their
+        own); the others ignore it.
         """
 
-    def reset(self) -> None:  # noqa: B027 - optional hook
-        """Forget run-time memory (called by ``Stack.reset`` and ``Controller.reset``)."""
+    def reset(self, memory: Any = None) -> None:  # noqa: B027 - optional hook
+        """Forget run-time memory: ``memory`` (default the constraint's own)."""
 
     # ----------------------------------------------------------------------------------- user API
     def box(self, state: State, dt: float) -> tuple[FloatArray, FloatArray]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import partial
 from operator import attrgetter, is_
 from typing import TYPE_CHECKING, Any
 
@@ -16,7 +17,7 @@ from ..hqp.validate import finite_ok
 from ..rows import Rows
 from ..safety import SafeSolve
 from ..stack import Stack
-from ..tasks.task import Task
+from ..tasks import Task, TaskSlot
 from .history import CommandHistory, box_bounds
 from .result import Reversals, StepResult, TaskErrors, TaskLayout, TaskResiduals
 
@@ -24,7 +25,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
 
 _ROW_WEIGHTS = attrgetter("row_weights")
-_LAST_ERROR = attrgetter("_error")  # as set: made an array by the lazy report
+_LAST_ERROR = attrgetter("error")  # as set: made an array by the lazy report
 _ACTIVATION = attrgetter("activation")
 
 
@@ -57,7 +58,14 @@ class StackAssembler:
     Each task writes its rows straight into its slice of ``problem.A`` / ``lo`` / ``hi``; box
     constraints intersect their box into the first n rows (static boxes merged once); row
     constraints write the hard rows. Row weights are re-read only when a task hands out a new
-    ``row_weights`` array. Nothing is allocated per tick.
+    ``row_weights`` array (after every ``update``: the task is then checked against the period
+    again). Nothing is allocated per tick.
+
+    The assembler owns the run-time memory of the stack in this controller: one
+    :class:`~uvms_qp.tasks.TaskSlot` per task (activation and its ramp, held targets, the last
+    error; :meth:`slot`) and one memory per constraint that keeps one (the previous command of
+    a command-rate bound). The stack itself stays a description that other controllers may
+    share.
 
     Args:
         model: The UVMS model.
@@ -68,10 +76,9 @@ class StackAssembler:
             (0: no damping; :mod:`uvms_qp.hqp.damping`).
 
     Attributes:
-        superseded: True once a later assembler took over one of the stack's tasks or
-            constraints (:meth:`fill` then refuses).
         problem: The problem the stack is written into.
         tasks: All tasks, highest priority first.
+        slots: The run-time memory of each task in this controller (same order).
         layout: Where each task's rows sit (for the per-task reports).
         level_names: Task names of each level.
         weights_version: Incremented whenever a row weight changed.
@@ -88,21 +95,24 @@ class StackAssembler:
     def __init__(self, model: Model, stack: Stack, dt: float, metric: FloatArray,
                  damping: float = DEFAULT_THRESHOLD) -> None:
         self.model = model
-        self.superseded = False
-        bound_to = stack.model
-        try:
-            self.stack = stack.bind(model)
-            self.stack.check_period(dt)
-        except Exception:
-            if bound_to is not None and bound_to is not model:
-                self._take_over(stack)  # partly bound to this model: no longer the other's
-            raise
-        self._take_over(stack)
+        self.stack = stack.bind(model)
+        self.stack.check_period(dt)
         self.dt = dt
         nv = int(model.nv)
         self.nv = nv
         levels = self.stack.levels
         self.tasks: tuple[Task, ...] = tuple(t for level in levels for t in level)
+        self.slots: tuple[TaskSlot, ...] = tuple(task.new_slot() for task in self.tasks)
+        self._by_name = dict(zip((t.name for t in self.tasks), self.slots, strict=True))
+        peers = dict(zip(self.tasks, self.slots, strict=True))
+        self._entries = tuple(stack.entries[t.name] for t in self.tasks)
+        for slot, entry in zip(self.slots, self._entries, strict=True):
+            slot.peers = peers
+            slot.activation, slot.seen = entry.activation, entry.serial
+        self._requests = stack.requests
+        self._ramping: list[int] = []  # tasks whose activation ramps
+        self._weight_sources = tuple(slot if task.weights_per_tick else task
+                                     for task, slot in zip(self.tasks, self.slots, strict=True))
         row_cons = [c for c in self.stack.constraints if c.rows_dim > 0]
         mh = sum(c.rows_dim for c in row_cons)
         self.problem = problem = Problem(nv, mh, [sum(t.dim for t in lv) for lv in levels], metric)
@@ -111,8 +121,8 @@ class StackAssembler:
         for task in self.tasks:
             spans.append((r, r + task.dim))
             r += task.dim
-        self._slots = [(task, A[a:b], sides[:, a:b]) for task, (a, b) in zip(
-            self.tasks, spans, strict=True)]
+        self._slots = [(task, A[a:b], sides[:, a:b], slot) for task, (a, b), slot in zip(
+            self.tasks, spans, self.slots, strict=True)]
         self._row_slots = []
         r = nv
         for c in row_cons:
@@ -120,10 +130,14 @@ class StackAssembler:
                                     hi[r:r + c.rows_dim]))
             r += c.rows_dim
         self._box_cons = [c for c in self.stack.constraints if c.has_box]
+        memory = {c: c.memory() for c in self.stack.constraints}
+        self._memories = [(c, m) for c, m in memory.items() if m is not None]
         # a box that yields (command-rate bounds) is filled last, clipped into the others
-        self._dynamic_box = sorted((c for c in self._box_cons if not c.is_static),
-                                   key=lambda c: c.yields)
-        self._constraints = self.stack.constraints
+        self._dynamic_box = [
+            c.fill_box if memory[c] is None
+            else partial(c.fill_box, memory=memory[c])  # type: ignore[call-arg]
+            for c in sorted((c for c in self._box_cons if not c.is_static),
+                            key=lambda c: c.yields)]
         self._box = problem.sides[:, :nv]
         self._lower, self._upper = self._box  # views
         self._static_box = np.empty((2, nv))
@@ -156,7 +170,7 @@ class StackAssembler:
 
         Raises:
             InputError: ``state`` is not a State of this model (e.g. a configuration array), or
-                a controller built later took over this one's tasks or constraints.
+                a task updated since the last tick whose rows would not settle at this period.
             NonFiniteError: a task or constraint produced NaN/inf rows (the message names it).
         """
         try:  # a try block costs nothing on the happy path
@@ -164,17 +178,19 @@ class StackAssembler:
                 raise InputError("state: belongs to another model than the controller's")
         except AttributeError:
             raise not_a_state(state) from None
-        if self.superseded:
-            self._refuse()
-        for task, A, sides in self._slots:
-            task.fill(state, t, A, sides)
-        if not all(map(is_, map(_ROW_WEIGHTS, self.tasks), self._weight_refs)):
+        if self.stack.requests != self._requests:
+            self._follow_requests()
+        if self._ramping:
+            self._advance(t)
+        for task, A, sides, slot in self._slots:
+            task.fill(state, t, A, sides, slot)
+        if not all(map(is_, map(_ROW_WEIGHTS, self._weight_sources), self._weight_refs)):
             self._refresh_weights()
         self._box[...] = self._static_box
         if self._dynamic_box:
             lower, upper, dt = self._lower, self._upper, self.dt
-            for c in self._dynamic_box:
-                c.fill_box(state, dt, lower, upper)
+            for fill_box in self._dynamic_box:
+                fill_box(state, dt, lower, upper)
         for c, HA, Hlo, Hhi in self._row_slots:
             c.fill_rows(state, self.dt, HA, Hlo, Hhi)
         problem = self.problem
@@ -182,45 +198,77 @@ class StackAssembler:
             self._diagnose(state)
         return problem
 
+    def _follow_requests(self) -> None:
+        """Start a ramp toward each activation the stack was asked for since the last tick."""
+        self._requests = self.stack.requests
+        for i, (slot, entry) in enumerate(zip(self.slots, self._entries, strict=True)):
+            if slot.seen != entry.serial:
+                slot.seen = entry.serial
+                slot.ramp = (slot.activation, entry.activation, -1.0)  # starts at this tick
+                if i not in self._ramping:
+                    self._ramping.append(i)
+
+    def _advance(self, t: float) -> None:
+        """Move the ramping activations to time ``t`` [s] (a pending ramp starts now).
+
+        ``a(t) = a_0 + (a_1 - a_0) (3 s^2 - 2 s^3)``, ``s = (t - t_0) / (ramp |a_1 - a_0|)``
+        clipped to [0, 1]. A ramp up from 0 first clears the task's slot: a task entering the
+        stack takes its held target then, not at the start of the run.
+        """
+        for i in tuple(self._ramping):
+            slot = self.slots[i]
+            a0, a1, start = slot.ramp  # type: ignore[misc]
+            if start < 0.0:
+                start = t
+                slot.ramp = (a0, a1, t)
+                if a0 == 0.0:
+                    slot.clear()
+            span = self._entries[i].ramp * abs(a1 - a0)
+            s = 1.0 if span <= 0.0 else min(max((t - start) / span, 0.0), 1.0)
+            slot.activation = a0 + (a1 - a0) * s * s * (3.0 - 2.0 * s)
+            if s >= 1.0:
+                slot.activation = a1
+                slot.ramp = None
+                self._ramping.remove(i)
+
+    def slot(self, name: str) -> TaskSlot:
+        """The run-time memory of task ``name`` in this controller (:class:`~.TaskSlot`).
+
+        Its last error, its activation, a held target: what reports read of a task.
+
+        Raises:
+            InputError: an unknown task (the known ones are listed).
+        """
+        slot = self._by_name.get(name)
+        if slot is None:
+            self.stack.task(name)  # raises, listing the known tasks
+        return slot  # type: ignore[return-value]
+
     def activation(self) -> tuple[tuple[int, ...], tuple[int, ...]]:
         """``(out, ramping)``: indices of the tasks at activation 0 and strictly between 0 and 1.
 
         Read after :meth:`fill` (which advances the tasks' ramps to this tick).
         """
-        values = list(map(_ACTIVATION, self.tasks))
+        values = list(map(_ACTIVATION, self.slots))
         if min(values) == 1.0:
             return (), ()
         return (tuple(i for i, a in enumerate(values) if a == 0.0),
                 tuple(i for i, a in enumerate(values) if 0.0 < a < 1.0))
 
     def reset(self) -> None:
-        """Forget the run-time memory of every task and constraint, and the command history.
+        """Forget this controller's run-time memory of the stack, and the command history.
 
-        Raises:
-            InputError: a controller built later took over this one's tasks or constraints.
+        Every slot is cleared and takes the activation the stack requests now (no ramp); every
+        constraint memory returns to its initial value.
         """
-        if self.superseded:
-            self._refuse()
-        self.stack.reset()
+        for slot, entry in zip(self.slots, self._entries, strict=True):
+            slot.clear()
+            slot.activation, slot.ramp, slot.seen = entry.activation, None, entry.serial
+        self._ramping.clear()
+        self._requests = self.stack.requests
+        for c, memory in self._memories:
+            c.reset(memory)
         self.history.reset()
-
-    def _take_over(self, stack: Stack) -> None:
-        """Make this assembler the owner of the stack's tasks and constraints.
-
-        The assembler that owned any of them before refuses to fill, reset or bound from now
-        on (:meth:`_refuse`).
-        """
-        for part in (*stack.tasks, *stack.constraints):
-            if part.owner is not None and part.owner is not self:
-                part.owner.superseded = True
-            part.owner = self
-
-    @staticmethod
-    def _refuse() -> None:
-        raise InputError(
-            "stack: a Controller built later took over this controller's tasks or "
-            "constraints (they keep run-time memory: ramps, held targets, the previous "
-            "command); give each controller its own stack (stack.copy())")
 
     def derived(self, excluded: tuple[int, ...], extra: tuple[FloatArray | None, ...]
                 ) -> Problem:
@@ -287,10 +335,21 @@ class StackAssembler:
             self._raise_empty_box(state)
 
     def _refresh_weights(self) -> None:
+        """Take the new row weights, checking an updated task against the control period.
+
+        A task hands out new weights after every update (:meth:`~.Task.check_period`).
+        """
         problem = self.problem
-        for k, task in enumerate(self.tasks):
-            rw = task.row_weights
+        for k, source in enumerate(self._weight_sources):
+            rw = source.row_weights
             if rw is not self._weight_refs[k]:
+                task = self.tasks[k]
+                if source is task:
+                    try:
+                        task.check_period(self.dt)
+                    except InputError as exc:
+                        exc.args = (f"task {task.name!r} updated: {exc}", *exc.args[1:])
+                        raise
                 problem.set_weights(rw, self._weight_rows[k])
                 self._weight_refs[k] = rw
         self.weights_version += 1
@@ -307,23 +366,23 @@ class StackAssembler:
         stack's problem.
         """
         x = out.x
-        for c in self._constraints:
-            c.command_sent(x)
+        for c, memory in self._memories:
+            c.command_sent(x, memory)
         ring, count = self.history.record(x)
         result = out.result
         box = result.box
         source: Any = result
         if solved is not None and solved is not self.problem:
             source = _Slacks(measure(self.problem, x)[0])
-        tasks = self.tasks
+        tasks, slots = self.tasks, self.slots
         return StepResult(
             x, result.status if status is None else status, result, t, step_time, scheme,
             solver, box[0], box[1], out.clip_flagged, self.level_names, out.stage, out.clipped,
             out.deadline_missed, out.attempts, TaskResiduals(self.layout, source),
-            TaskErrors(self.layout, tuple(map(_LAST_ERROR, tasks))),
+            TaskErrors(self.layout, tuple(map(_LAST_ERROR, slots))),
             damping=damping,
             inactive=tuple(tasks[i].name for i in excluded) if excluded else (),
-            ramping={tasks[i].name: tasks[i].activation for i in ramping} if ramping else None,
+            ramping={tasks[i].name: slots[i].activation for i in ramping} if ramping else None,
             reversals=Reversals(self.history, ring.copy(), count, self.model.zeta_names))
 
     # ------------------------------------------------------------------------- inspection
@@ -339,12 +398,10 @@ class StackAssembler:
 
     def bounds(self, state: State) -> tuple[FloatArray, FloatArray]:
         """Merged hard box ``(lower, upper)`` on zeta at ``state`` (copies)."""
-        if self.superseded:
-            self._refuse()
         self._box[...] = self._static_box
         lower, upper = self._box
-        for c in self._dynamic_box:
-            c.fill_box(state, self.dt, lower, upper)
+        for fill_box in self._dynamic_box:
+            fill_box(state, self.dt, lower, upper)
         if (lower > upper).any():
             self._raise_empty_box(state)
         return lower.copy(), upper.copy()
@@ -357,7 +414,7 @@ class StackAssembler:
         :func:`~uvms_qp.hqp.validate.finite_ok` overflowed on large finite values).
         """
         named: list[tuple[str, FloatArray, FloatArray, FloatArray]] = [
-            *[(f"task {task.name!r}", A, lo, hi) for task, A, (lo, hi) in self._slots],
+            *[(f"task {task.name!r}", A, lo, hi) for task, A, (lo, hi), _ in self._slots],
             *[(f"constraint {c.name!r}", A, lo, hi) for c, A, lo, hi in self._row_slots]]
         for who, A, lo, hi in named:
             if not np.isfinite(A).all():

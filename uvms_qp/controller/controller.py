@@ -22,7 +22,7 @@ from ..model import Model
 from ..rows import Rows
 from ..safety import SafeSolver
 from ..stack import Stack
-from ..tasks.task import Task
+from ..tasks import Task, TaskSlot
 from .assembler import StackAssembler
 from .result import StepResult
 from .schemes import SCHEMES
@@ -56,9 +56,8 @@ class Controller:
 
     Args:
         model: The UVMS model (the stack is bound to it here).
-        stack: Levels of tasks and hard constraints. The controller takes its tasks and
-            constraints over: a controller built earlier on any of them refuses to step
-            afterwards (each controller needs its own stack, :meth:`~uvms_qp.stack.Stack.copy`).
+        stack: Levels of tasks and hard constraints. The controller keeps its own run-time
+            memory of them (:meth:`slot`), so several controllers may share one stack.
         solver: Back-end (``"daqp"``, ``"cascade:<qpsolvers name>"``, ``"nullspace"``).
         dt: Control period [s] (turns position limits into rate bounds).
         metric: Diagonal W (nv,) of the final regularisation ``min zeta' W zeta`` (positive), or
@@ -79,6 +78,12 @@ class Controller:
             >= 0: a level's directions whose singular value, in the freedom the higher levels
             leave, is below it get bounded rates (:mod:`uvms_qp.hqp.damping`); away from
             singularities nothing changes. 0 turns damping off.
+        coordination: Arm-vehicle coordination (Simetti et al. (2014), J. Field Robotics
+            31(3)): when a state carries the vehicle's measured body velocity
+            (``model.state(q, velocity)``, as a floating plant gives it), the joints are
+            re-solved with the vehicle's rates fixed at their measured values, so the arm
+            absorbs the vehicle's tracking error; such steps have status ``coordinated``.
+            ``hqp`` and ``weighted`` schemes; a state without a velocity is solved as usual.
 
     Raises:
         InputError: bad dt, metric or scheme; any binding error of the stack (unknown frame,
@@ -91,7 +96,7 @@ class Controller:
                  metric: Any = None, *, scheme: str = "hqp", priority_ratio: float = 1e4,
                  options: dict[str, Any] | None = None, strict: bool = False,
                  deadline: float | str | None = "period",
-                 damping: float = DEFAULT_THRESHOLD) -> None:
+                 damping: float = DEFAULT_THRESHOLD, coordination: bool = False) -> None:
         _check_arguments(model, solver, options, strict)
         if not isinstance(stack, Stack):
             raise InputError(f"stack: expected a Stack, got {type(stack).__name__}")
@@ -117,6 +122,15 @@ class Controller:
                                        priority_ratio=self.priority_ratio)
         self.solver_name = self._scheme.solver_name
         self.level_names = self.assembler.level_names
+        if not isinstance(coordination, bool | np.bool_):
+            raise InputError(f"coordination: expected True or False, got {coordination!r}")
+        if coordination and scheme == "nullspace":
+            raise InputError("coordination: the closed-form 'nullspace' scheme has no box to fix "
+                             "the vehicle's rates in; use scheme='hqp' or 'weighted'")
+        self.coordination = bool(coordination)
+        if self.coordination:
+            self._scheme.coordination = SafeSolver(self.solver_name, None, options,
+                                                   alternate=None, deadline=deadline)
 
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Compute zeta for ``state`` at time ``t`` [s].
@@ -138,13 +152,23 @@ class Controller:
         return self._scheme.step(state, t)
 
     def reset(self) -> None:
-        """Reset the run-time memory of every task and of the fallback ladder."""
+        """Reset this controller's memory of every task and constraint, and the fallback ladder."""
         self._scheme.reset()
 
     @property
     def tasks(self) -> tuple[Task, ...]:
         """All tasks, highest priority first."""
         return self.assembler.tasks
+
+    def slot(self, name: str) -> TaskSlot:
+        """The run-time memory of task ``name`` in this controller (:class:`~.TaskSlot`).
+
+        Its last error (``last_error``), its activation, a held target.
+
+        Raises:
+            InputError: an unknown task (the known ones are listed).
+        """
+        return self.assembler.slot(name)
 
     @property
     def safe(self) -> SafeSolver:

@@ -14,7 +14,7 @@ from ..hqp.result import OK_STATUSES, levels_note
 from .history import HISTORY_WINDOW, CommandHistory, reversals_per_s
 
 #: Statuses of a verified answer of a scheme: the lexicographic optimum, damped or blended.
-USABLE_STATUSES = (*OK_STATUSES, Status.DAMPED, Status.BLENDED)
+USABLE_STATUSES = (*OK_STATUSES, Status.DAMPED, Status.BLENDED, Status.COORDINATED)
 
 Report = Mapping[str, tuple[float, str]]
 """Task name -> (value, unit)."""

@@ -39,8 +39,9 @@ from .._validation import FloatArray, as_time
 from ..errors import InputError, NoSolutionFound
 from ..hqp import Problem, Status
 from ..hqp.damping import Damping, level_damping
-from ..hqp.measure import clip_to_box, evaluate
+from ..hqp.measure import clip_to_box, evaluate, hard_violation
 from ..hqp.registry import get_spec
+from ..model.vehicle import NU_NAMES
 from ..safety import DEGRADED_STAGES, SafeSolve, SafeSolver, default_alternate
 from ..safety.fallback import Damper
 from .assembler import StackAssembler
@@ -100,6 +101,13 @@ class _StackScheme:
         self.solver_name = safe.name
         self.status_counts: Counter[str] = Counter()
         self._damped_stack: Problem | None = None  # this step's damped problem, if any
+        #: The solver that re-solves the joints with the vehicle at its measured velocity
+        #: (:meth:`_coordinate`; its own back-end, warm-started on its own problems), or None.
+        self.coordination: SafeSolver | None = None
+        model = assembler.model
+        self._measured = [NU_NAMES.index(d) for d in model.actuated] if (
+            model.vehicle_kind == "spatial") else []
+        self._coordinated: dict[Problem, tuple[Problem, list[int]]] = {}
 
     def step(self, state: State, t: float = 0.0) -> StepResult:
         """Fill the problem, solve it through the ladder, measure the command.
@@ -138,6 +146,11 @@ class _StackScheme:
             blend = self._blend(excluded, ramping, out, solved, start)
             if blend is not None:  # (a blend with an unproven answer is not proven either)
                 out, status = blend, (Status.BLENDED if out.result.ok else Status.UNPROVEN)
+        if (self.coordination is not None and state.velocity is not None and out.solved
+                and self._measured):
+            coordinated = self._coordinate(state.velocity, out, solved, start)
+            if coordinated is not None:
+                out, solved, status = coordinated[0], coordinated[1], Status.COORDINATED
         self.safe.previous = out.x
         self.status_counts[status.value] += 1
         step_time = clock() - start
@@ -181,8 +194,8 @@ class _StackScheme:
         primary back-end through the ladder (:meth:`SafeSolver.solve_once`, damped where
         needed); None when one fails or the deadline passes.
         """
-        tasks = self.assembler.tasks
-        a = [tasks[i].activation for i in ramping]
+        tasks, slots = self.assembler.tasks, self.assembler.slots
+        a = [slots[i].activation for i in ramping]
         x = np.zeros_like(main.x)
         damped_stack = self._damped_stack
         for mask in range(1 << len(ramping)):
@@ -203,11 +216,59 @@ class _StackScheme:
         problem = self._scheme_problem(solved)
         x, _ = clip_to_box(x, problem.lower, problem.upper)  # round-off only: the box is convex
         primary = self.safe.primary
-        active = ", ".join(f"{tasks[i].name} {tasks[i].activation:.3g}" for i in ramping)
+        active = ", ".join(f"{tasks[i].name} {slots[i].activation:.3g}" for i in ramping)
         result = evaluate(problem, x, Status.BLENDED, main.result.solver,
                           f"blended: activation {active}", level_tol=primary.level_tol,
                           hard_tol=primary.hard_tol, solve_time=main.result.solve_time)
         return dataclasses.replace(main, x=x, result=result)
+
+    def _coordinate(self, velocity: FloatArray, main: SafeSolve, solved: Problem, start: float
+                    ) -> tuple[SafeSolve, Problem] | None:
+        """Arm-vehicle coordination: the joints re-solved with the vehicle at its measured rates.
+
+        The kinematic layer's vehicle rates are a reference the vehicle follows with a lag; the
+        arm, faster, can absorb the difference. As in Simetti et al. (2014), J. Field Robotics
+        31(3), Section 4 (and Simetti, Casalino, Wanderlingh, Aicardi (2018), Ocean Engineering
+        164), the stack is solved a second time with each actuated vehicle rate fixed at its
+        measured value (its box entry set to it: the vehicle's rates are data, not decisions),
+        so the joint rates are the lexicographic optimum given what the vehicle does; the
+        vehicle keeps the first answer's reference. The problem is the one the first answer
+        solved (its damping rows included).
+
+        Returns:
+            ``(outcome, problem)``: the command (vehicle rates of ``main``, joint rates of the
+            second answer; its ``result`` is the second answer's measurement, vehicle at the
+            measured rates) and the second problem; None when the
+            second solve gives no proven answer or the deadline has passed, or when the command
+            breaks a hard row of ``solved`` (rows that couple the vehicle's rates to the joints'
+            hold for the measured rates, not always for the reference): the step then keeps
+            ``main``.
+        """
+        source = self._scheme_problem(solved)
+        entry = self._coordinated.get(source)
+        if entry is None:
+            entry = self._coordinated[source] = (source.copy(), [-1])
+        problem, version = entry
+        np.copyto(problem.A, source.A)
+        np.copyto(problem.sides, source.sides)
+        if version[0] != source.weights_version:
+            problem.set_weights(source.w)
+            version[0] = source.weights_version
+        n_vehicle = len(self._measured)
+        measured = velocity[self._measured]
+        problem.lower[:n_vehicle] = measured
+        problem.upper[:n_vehicle] = measured
+        assert self.coordination is not None
+        other = self.coordination.solve_once(problem, start)
+        if other is None:
+            return None
+        x = main.x.copy()
+        x[n_vehicle:] = other.x[n_vehicle:]
+        hard = source.hard
+        if hard_violation(x, source.lower, source.upper, hard.A, hard.lower,
+                          hard.upper) > self.safe.hard_tol * source.hard_scale:
+            return None
+        return dataclasses.replace(main, x=x, result=other.result), problem
 
     def _scheme_problem(self, problem: Problem) -> Problem:
         """The problem this scheme hands to the ladder for the stack's ``problem``."""

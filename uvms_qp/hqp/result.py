@@ -37,6 +37,10 @@ class Status(StrEnum):
             them: those levels trade residual for bounded rates.
         BLENDED: ``x`` is a convex combination of the optima with and without tasks whose
             activation ramps between 0 and 1: the optimum of neither.
+        COORDINATED: arm-vehicle coordination (a controller option on a floating vehicle): the
+            vehicle's rates are the answer of the whole stack, the joints' rates the proven
+            lexicographic optimum of the stack with the vehicle's rates fixed at their measured
+            values; the command as a whole is the optimum of neither problem.
 
     Migration: versions before this vocabulary called a proven optimum with an unmet level
     ``level_infeasible``; ``Status("level_infeasible")`` reads it as :attr:`OPTIMAL` (e.g. a
@@ -49,6 +53,7 @@ class Status(StrEnum):
     BACKEND_ERROR = "backend_error"
     DAMPED = "damped"
     BLENDED = "blended"
+    COORDINATED = "coordinated"
 
     @classmethod
     def _missing_(cls, value: object) -> Status | None:

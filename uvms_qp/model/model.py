@@ -562,9 +562,29 @@ class Model:
 
     # --- kinematics --------------------------------------------------------------------
 
-    def state(self, q: Any) -> State:
-        """Kinematic state at ``q`` (validated); see :class:`~uvms_qp.model.state.State`."""
-        return State(self, q)
+    def state(self, q: Any, velocity: Any = None) -> State:
+        """Kinematic state at ``q`` (validated); see :class:`~uvms_qp.model.state.State`.
+
+        Args:
+            q: Configuration (nq,).
+            velocity: Measured vehicle body velocity ``nu`` (6,) [m/s, rad/s] of a spatial
+                vehicle, or None (none measured: a kinematic run).
+        """
+        return State(self, q, velocity)
+
+    def check_body_velocity(self, velocity: Any) -> FloatArray:
+        """Validate a measured body velocity ``nu`` (6,) [m/s, rad/s]: a read-only copy.
+
+        Raises:
+            InputError: the model's vehicle is not spatial (no six-component body velocity).
+            ShapeError: not 6 entries. NonFiniteError: NaN or inf.
+        """
+        if self.vehicle_kind != "spatial":
+            raise InputError(f"velocity: a measured body velocity needs a spatial vehicle; "
+                             f"model {self.name!r} has a {self.vehicle_kind} one")
+        nu = as_vector(velocity, "velocity", 6).copy()
+        nu.setflags(write=False)
+        return nu
 
     def frame_pose(self, q: Any, frame: str) -> FloatArray:
         """Pose ``T_world_frame`` (4x4) of a frame at configuration ``q``."""
@@ -583,6 +603,13 @@ class Model:
             f"{self.name}: {self.nv} DOF = {self.n_vehicle} vehicle + {self.n_joints} joints; "
             f"{veh}; joints [{', '.join(self.joint_names)}]"
         )
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Model:
+        """The model itself: a loaded model is shared, never copied.
+
+        A deep copy of a stack or of a task bound to the model refers to the same model.
+        """
+        return self
 
     def __repr__(self) -> str:
         return f"<Model {self.summary()}>"

@@ -55,6 +55,10 @@ class State:
         joints: Joint angles [rad] (read-only view of ``q``, length ``model.n_joints``).
         serial: A number no other state of this process has (for per-state caches of
             consumers, e.g. a task whose value another task reads in the same tick).
+        velocity: The measured vehicle body velocity ``nu = [u, v, w, p, q, r]`` (6,)
+            [m/s, rad/s], FRD body axes (read-only), when the state comes from a plant that
+            measures it (a floating vehicle); None otherwise (a kinematic run, where the
+            command is the velocity).
 
     Twists are ``[v; omega]``: ``v`` the velocity of the frame origin [m/s], ``omega`` the
     angular velocity [rad/s]. Jacobians map ``zeta`` (length ``model.nv``) to twists, in world
@@ -63,14 +67,20 @@ class State:
 
     __slots__ = ("_arm_data", "_arm_jacobians", "_arm_positions", "_data", "_eta",
                  "_eta_jacobian", "_jacobians", "_poses", "_vehicle_pose", "joints", "model", "q",
-                 "serial")
+                 "serial", "velocity")
 
-    def __init__(self, model: Model, q: Any) -> None:
-        """Validate ``q`` and compute the kinematics (see :meth:`Model.check_configuration`)."""
+    def __init__(self, model: Model, q: Any, velocity: Any = None) -> None:
+        """Validate ``q`` and compute the kinematics (see :meth:`Model.check_configuration`).
+
+        ``velocity`` (6,) [m/s, rad/s] is the measured body velocity of a spatial vehicle, or
+        None (see the class attributes).
+        """
         q = model.check_configuration(q)
         q.setflags(write=False)
         self.model = model
         self.q: FloatArray = q
+        self.velocity: FloatArray | None = (
+            None if velocity is None else model.check_body_velocity(velocity))
         self.joints: FloatArray = q[model.nq_vehicle:]
         self.serial = next(_serials)
         pool = model._data_pool

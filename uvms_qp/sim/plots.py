@@ -12,7 +12,9 @@ One file per topic, each drawn only when the run has something to show:
   window ``zeta_(k-1) +/- a_max dt`` they allowed at each step (green dotted);
 - ``residuals.png``: per-level residual norms (log scale), levels numbered from 0 as in
   the ``summary()`` of a solve and of a control step;
-- ``payload_moment.png``: with a payload task.
+- ``payload_moment.png``: with a payload task;
+- on a dynamic plant, the figures of :mod:`uvms_qp.sim.dynamic_figures` (thrusters, velocity
+  tracking, attitude disturbance, joint torques).
 
 Dotted vertical lines mark the scenario's events. :func:`run_figures` gives the figures as
 matplotlib objects (to inspect or restyle); :func:`plot_results` writes them.
@@ -36,6 +38,7 @@ from ._figures import (
     unit_label,
     write_figures,
 )
+from .dynamic_figures import dynamic_builders
 from .units import LINEAR_RATES
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -266,6 +269,7 @@ def _builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
         yield "residuals.png", lambda: _residuals(result)
     if result.payload_moment is not None:
         yield "payload_moment.png", lambda: _payload_moment(result)
+    yield from dynamic_builders(result)
 
 
 def run_figures(result: SimulationResult) -> dict[str, Any]:

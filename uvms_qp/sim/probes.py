@@ -11,26 +11,32 @@
   frame [m] and ``F`` the payload force [N] currently set on the payload task
   (Wang et al. (2017), Eq. (20); [N m^2] as in the paper), through the task's
   ``compute_value(state)``.
-- Tool tracking: the tracked task's frame pose and its target (``task.target(t)``).
+- Tool tracking: the tracked task's frame pose and its target (``task.target(t, slot=...)``).
 - Heading: the target heading of a current-alignment task (``heading + offset``), else the
   scenario current's direction.
 - Task errors: the norm of the error ``e = x_d - x`` of every regulated task (each
-  :class:`~uvms_qp.tasks.ErrorTask` of the stack, ``task.compute_error(state, t)``) [its
+  :class:`~uvms_qp.tasks.ErrorTask` of the stack, ``task.compute_error(state, t, slot)``) [its
   ``error_unit``], whatever scheme commands the run: the settling times come from them.
+
+A task's run-time memory (a held target) is read from the slots of the controller that runs the
+stack (``Controller.slot(name)``), so a held target is the one the controller holds; a scheme
+without slots (the papers' closed forms) is measured with the probes' own slots.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._validation import FloatArray
-from ..tasks.manipulability import default_rows
-from ..tasks.task import ErrorTask
+from ..tasks import ErrorTask
+from ..tasks.manipulability_measure import default_rows
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..stack import Stack
+    from ..tasks import TaskSlot
     from .scenario import Scenario
 
 
@@ -63,9 +69,12 @@ class Probes:
         scenario: The scenario being run.
         stack: The run's stack (its tasks give the target, the measures and the payload force).
         size: Number of states to record (steps + 1).
+        slot: The run-time memory of a task by name in the controller of the run
+            (``Controller.slot``), or None: the probes keep their own.
     """
 
-    def __init__(self, scenario: Scenario, stack: Stack, size: int) -> None:
+    def __init__(self, scenario: Scenario, stack: Stack, size: int,
+                 slot: Callable[[str], TaskSlot] | None = None) -> None:
         model = scenario.model
         self.model = model
         self.tracked = stack.task(scenario.tracking) if scenario.tracking else None
@@ -86,7 +95,7 @@ class Probes:
         rows = len(self.manipulability_rows)
         self.manipulability_unit = str(getattr(task, "error_unit", "")) if task else (
             "m" if rows == 1 else f"m^{rows}")
-        has_floor = task is not None and getattr(task, "mode", "") == "floor"
+        has_floor = task is not None and hasattr(task, "minimum")
         self.manipulability_floor = np.full(size, np.nan) if has_floor else None
         self.has_yaw = getattr(model, "vehicle_kind", "fixed") != "fixed"
         self.eta = np.zeros((size, int(model.eta_size)))
@@ -99,6 +108,10 @@ class Probes:
         has_payload = self.payload_task is not None
         self.payload_objective = np.zeros(size) if has_payload else None
         self.payload_moment = np.zeros(size) if has_payload else None
+        if slot is None:
+            own = {t.name: t.new_slot() for t in stack.tasks}
+            slot = own.__getitem__
+        self.slot = slot
         self.regulated = [t for t in stack.tasks if isinstance(t, ErrorTask)]
         self.task_errors = {t.name: np.full(size, np.nan) for t in self.regulated}
         self.task_error_units = {t.name: str(t.error_unit) for t in self.regulated}
@@ -114,7 +127,7 @@ class Probes:
         if self.tracked is not None:
             target = getattr(self.tracked, "target", None)
             if callable(target):
-                position = target(t)[0]
+                position = target(t, slot=self.slot(self.tracked.name))[0]
                 if position is not None:
                     self.target_position[k] = position
         if self.manipulability_task is not None:
@@ -131,8 +144,15 @@ class Probes:
             self.payload_objective[k] = objective
             self.payload_moment[k] = float(np.sqrt(max(objective, 0.0) * self.payload_task.force))
         for task in self.regulated:
-            e = task.compute_error(state, t)
+            e = task.compute_error(state, t, self.slot(task.name))
             self.task_errors[task.name][k] = float(np.sqrt(e @ e))
+
+    def truncate(self, count: int) -> None:
+        """Keep the first ``count`` states of every series (a run that ended early)."""
+        for name, value in list(vars(self).items()):
+            if isinstance(value, np.ndarray) and value.ndim and value.shape[0] > count:
+                setattr(self, name, value[:count])
+        self.task_errors = {name: series[:count] for name, series in self.task_errors.items()}
 
     def arrays(self) -> dict[str, Any]:
         """The recorded arrays by name (``yaw`` and the payload series only when defined)."""

@@ -1,8 +1,11 @@
 """``results.json``: the record of one run.
 
-Top level: ``scenario``, ``scheme``, ``solver``, ``model``, ``dt`` [s], ``steps``, ``duration``
-[s], ``wall_time_s``, ``metrics`` (see :mod:`uvms_qp.sim.metrics`), ``phases`` (metrics per
-scenario phase), ``events`` (applied run-time changes) and ``series``:
+Top level: ``scenario``, ``scheme``, ``solver``, ``model``, ``plant`` (``"kinematic"`` or
+``"dynamic"``), ``dt`` [s], ``steps``, ``duration`` [s], ``wall_time_s``, ``metrics`` (see
+:mod:`uvms_qp.sim.metrics`; a dynamic run adds :mod:`uvms_qp.sim.dynamic_metrics`), ``phases``
+(metrics per scenario phase), ``events`` (applied run-time changes), ``stopped`` (only when the run
+ended early: ``time`` [s], ``step`` and ``error``), ``kinematic_reference`` (a dynamic run's record
+of the kinematic run of the same scenario: its ``metrics`` and ``wall_time_s``) and ``series``:
 
 - per state (N+1 entries, times ``time``): ``time`` [s], ``q``, ``vehicle_pose`` (eta [m, rad]),
   ``joints`` [rad or m, ``joint_units``], ``ee_pose`` (tracked frame
@@ -18,7 +21,11 @@ scenario phase), ``events`` (applied run-time changes) and ``series``:
   happy path; :data:`uvms_qp.safety.STAGES`), ``clipped`` (amount the final saturation removed
   [m/s, rad/s]) and ``deadline_missed`` (booleans);
 - ``command_rate_limit``: the acceleration bound of each entry of zeta [m/s^2, rad/s^2] of the
-  stack's command-rate bounds (``null`` where none), when the stack has them.
+  stack's command-rate bounds (``null`` where none), when the stack has them;
+- ``dynamics`` (dynamic plant): the servo-rate record
+  (:class:`~uvms_qp.sim.dynamic_plant.DynamicSeries`: thruster forces, commands and limits,
+  saturation, power and energy, demanded and unmet wrenches, true and reference body velocity,
+  joint rates, references and torques).
 
 ``metrics`` also holds ``stage_counts`` (steps per stage), ``deadline_missed_steps`` and
 ``clipped_max``.
@@ -128,20 +135,29 @@ def _ee_pose(result: SimulationResult) -> np.ndarray:
     return poses
 
 
+def _dynamics(series: Any) -> dict[str, Any]:
+    """The servo-rate record of a dynamic run (``DynamicSeries``, by field name)."""
+    return dict(vars(series))
+
+
 def results_dict(result: SimulationResult, *, series: bool = True,
-                 command: Sequence[str] | None = None) -> dict[str, Any]:
+                 command: Sequence[str] | None = None,
+                 reference: SimulationResult | None = None) -> dict[str, Any]:
     """The content of ``results.json`` for one run (see the module docstring).
 
     Args:
         result: The run.
         series: Include the recorded series.
         command: Command line of the provenance block (default: ``sys.argv``).
+        reference: The kinematic run of the same scenario, whose metrics a dynamic run's
+            record carries as ``kinematic_reference`` (None: none).
     """
     data: dict[str, Any] = {
         "scenario": result.scenario,
         "scheme": result.scheme,
         "solver": result.solver,
         "model": result.model,
+        "plant": result.plant,
         "dt": result.dt,
         "steps": result.steps,
         "duration": result.steps * result.dt,
@@ -151,6 +167,11 @@ def results_dict(result: SimulationResult, *, series: bool = True,
         "events": result.events,
         "provenance": provenance(command),
     }
+    if result.stopped is not None:
+        data["stopped"] = result.stopped
+    if reference is not None:
+        data["kinematic_reference"] = {"metrics": reference.metrics(),
+                                       "wall_time_s": reference.wall_time}
     if series:
         record: dict[str, Any] = {
             "time": result.time_states,
@@ -189,21 +210,26 @@ def results_dict(result: SimulationResult, *, series: bool = True,
         record["task_error_units"] = result.task_error_units
         if result.command_rate_limit is not None:
             record["command_rate_limit"] = result.command_rate_limit
+        if result.dynamics is not None:
+            record["dynamics"] = _dynamics(result.dynamics)
         data["series"] = record
     return _clean(data)  # type: ignore[no-any-return]
 
 
 def write_results(result: SimulationResult, out_dir: str | Path, *,
-                  command: Sequence[str] | None = None) -> Path:
+                  command: Sequence[str] | None = None,
+                  reference: SimulationResult | None = None) -> Path:
     """Write ``out_dir/results.json`` atomically (mode 0644) and return its path.
 
     Args:
         result: The run.
         out_dir: Output directory (created if needed).
         command: Command line of the provenance block (default: ``sys.argv``).
+        reference: The kinematic run of the same scenario (see :func:`results_dict`).
     """
     directory = Path(out_dir)
     directory.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(results_dict(result, command=command), allow_nan=False,
+    text = json.dumps(results_dict(result, command=command, reference=reference),
+                      allow_nan=False,
                       separators=(",", ":"))
     return write_atomic(directory / RESULTS_FILE, text)

@@ -1,16 +1,24 @@
-"""Closed-loop kinematic simulation of a scenario.
+"""Closed-loop simulation of a scenario.
 
 Each control step ``k`` at ``t_k = k dt``:
 
 1. apply the scenario events due at ``t_k`` (``task.update(**params)``);
-2. build the :class:`~uvms_qp.model.State` of ``q_k`` (kinematics computed once);
+2. the controller's view of the plant: the :class:`~uvms_qp.model.State` of the measured
+   configuration (the true one, or what the scenario's :class:`~uvms_qp.sim.sensors.Sensors`
+   make of it: noisy, late) with the measured body velocity of a dynamic plant;
 3. ``zeta_k = scheme.step(state, t_k).zeta`` (the HQP controller or any scheme with the same
    ``step``/``reset`` interface); a non-finite command is counted and replaced by zero;
 4. record the series (with the fallback stage that produced the command, the amount the final
    saturation clipped and whether the step missed its deadline: three plain Python values per
    step) and check the command against every hard row of the stack's constraints, recomputed
    independently of the controller;
-5. ``q_{k+1} = integrator.step(q_k, zeta_k, dt)`` on the configuration manifold.
+5. the plant (:mod:`uvms_qp.sim.plants`) applies ``zeta_k`` for one period: integrated exactly
+   on the configuration manifold (kinematic), or tracked by the velocity loop, thrusters and
+   joint servos of a floating vehicle (dynamic).
+
+The recorded series and the metrics are those of the true state. A dynamic plant that diverges
+(:class:`~uvms_qp.errors.SimulationDiverged`) ends the run early: the result keeps every step
+recorded before the failure and says why in ``stopped``.
 
 The result keeps plain numpy arrays; :mod:`uvms_qp.sim.metrics` turns them into numbers and
 :mod:`uvms_qp.sim.results` writes them to ``results.json``.
@@ -26,10 +34,13 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..constraints import CommandRateBounds, intersect_boxes
+from ..errors import SimulationDiverged
 from ..hqp import hard_violation
 from ..safety import STAGES
 from ..stack import Stack
 from . import metrics as run_metrics
+from .dynamic_metrics import dynamic_metrics
+from .dynamic_metrics import phase_metrics as dynamic_phase_metrics
 from .probes import Probes
 from .units import joint_units, zeta_units
 
@@ -105,6 +116,11 @@ class SimulationResult:
             several; ``inf`` where none), or None without them.
         command_initial: The previous command of the first step those bounds assumed (nv,)
             (zero: at rest), or None (free first step or no such bounds).
+        plant: ``"kinematic"`` or ``"dynamic"`` (:mod:`uvms_qp.sim.plants`).
+        dynamics: What a dynamic plant recorded
+            (:class:`~uvms_qp.sim.dynamic_plant.DynamicSeries`), None for a kinematic run.
+        stopped: Why the run ended early (``{"time": t [s], "step": k, "error": message}``),
+            None when it ran to the end. The series then hold the steps before the failure.
     """
 
     scenario: str
@@ -157,16 +173,21 @@ class SimulationResult:
     task_error_units: dict[str, str] = field(default_factory=dict)
     command_rate_limit: FloatArray | None = None
     command_initial: FloatArray | None = None
+    plant: str = "kinematic"
+    dynamics: Any = None
+    stopped: dict[str, Any] | None = None
 
     def metrics(self) -> dict[str, Any]:
         """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`) and the fallback ones.
 
         Added to the simulator's metrics: ``stage_counts`` (steps per fallback stage, in ladder
         order, stages that occurred only), ``deadline_missed_steps`` and ``clipped_max``
-        [m/s, rad/s] (largest amount the final saturation removed from a command).
+        [m/s, rad/s] (largest amount the final saturation removed from a command); on a dynamic
+        plant, :func:`uvms_qp.sim.dynamic_metrics.dynamic_metrics`.
         """
         metrics = run_metrics.compute_metrics(self)
         metrics.update(self.fallback_metrics())
+        metrics.update(dynamic_metrics(self))
         return metrics
 
     def fallback_metrics(self) -> dict[str, Any]:
@@ -186,7 +207,8 @@ class SimulationResult:
 
     def phase_metrics(self) -> dict[str, dict[str, Any]]:
         """Metrics of every scenario phase, by phase name."""
-        return {name: run_metrics.phase_metrics(self, a, b) for name, (a, b) in self.phases.items()}
+        return {name: {**run_metrics.phase_metrics(self, a, b), **dynamic_phase_metrics(self, a, b)}
+                for name, (a, b) in self.phases.items()}
 
 
 def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: FloatArray,
@@ -203,6 +225,17 @@ def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: F
     return hard_violation(zeta, lower, upper, np.vstack([r.A for r in rows]),
                           np.concatenate([r.lower for r in rows]),
                           np.concatenate([r.upper for r in rows]))
+
+
+def _measured_state(model: Any, plant: Any, channel: Any, truth: Any) -> Any:
+    """The state the controller is given: the sensors' view of the plant (``truth`` if exact)."""
+    nu = plant.body_velocity
+    if channel is None:
+        return truth if nu is None else model.state(truth.q, nu)
+    q = channel.pose(truth.q)
+    if nu is not None:
+        return model.state(q, channel.body_velocity(nu))
+    return truth if q is truth.q else model.state(q)
 
 
 class _Progress:
@@ -278,7 +311,7 @@ def simulate(
     n = scenario.steps
     nv, nq = int(model.nv), int(model.nq)
     n_levels = len(stack.levels)
-    probes = Probes(scenario, stack, n + 1)
+    probes = Probes(scenario, stack, n + 1, getattr(scheme, "slot", None))
     constraints = list(stack.constraints)
     for constraint in constraints:  # the run starts from the constraints' initial memory
         constraint.reset()
@@ -316,7 +349,10 @@ def simulate(
         return z if np.all(np.isfinite(z)) else zero
 
     bar = _Progress(n, f"{scenario.name} ({scheme_name})", progress)
-    q = np.array(scenario.q0, dtype=np.float64)
+    channel = scenario.sensors.channel(model, dt) if scenario.sensors is not None else None
+    plant = scenario.make_plant(channel)
+    plant.start(np.array(scenario.q0, dtype=np.float64))
+    stopped: dict[str, Any] | None = None
     started = _time.perf_counter()
     for k in range(n):
         t = float(time[k])
@@ -324,9 +360,11 @@ def simulate(
             event = pending.pop(0)
             event.apply(stack)
             applied.append({"time": t, "task": event.task, "update": dict(event.update)})
-        state = model.state(q)
+        q = plant.q
+        truth = model.state(q)
         q_log[k] = q
-        probes.record(k, state, t)
+        probes.record(k, truth, t)
+        state = _measured_state(model, plant, channel, truth)
         intersect_boxes(constraints, state, dt, lower_log[k], upper_log[k])
         result = scheme.step(state, t)
         zeta = np.asarray(result.zeta, dtype=np.float64)
@@ -357,13 +395,26 @@ def simulate(
         for constraint in constraints:  # a scheme other than the controller may not tell them
             constraint.command_sent(zeta)
         speed[k] = float(np.linalg.norm(zeta[:n_lin])) if n_lin else 0.0
-        q = scenario.integrator.step(q, zeta, dt, t, rates)
+        try:
+            plant.advance(zeta, t, rates)
+        except SimulationDiverged as exc:
+            stopped = {"time": float(exc.t), "step": k, "error": str(exc)}
+            n = k  # the failed step's command was never realised: keep the steps before it
+            break
         bar.update(k + 1)
     bar.close()
     wall = _time.perf_counter() - started
-    final_state = model.state(q)
+    q = plant.q if stopped is None else q_log[n]
     q_log[n] = q
-    probes.record(n, final_state, float(time_states[n]))
+    probes.record(n, model.state(q), float(time_states[n]))
+    if stopped is not None:
+        probes.truncate(n + 1)
+        time, time_states = time[:n], time_states[: n + 1]
+        zeta_log, lower_log, upper_log = zeta_log[:n], lower_log[:n], upper_log[:n]
+        q_log, step_time, clipped = q_log[: n + 1], step_time[:n], clipped[:n]
+        status, stage, missed = status[:n], stage[:n], missed[:n]
+        level_res, violation, speed = level_res[:n], violation[:n], speed[:n]
+        task_res = {name: series[:n] for name, series in task_res.items()}
     data = probes.arrays()
     return SimulationResult(
         scenario=scenario.name,
@@ -416,4 +467,7 @@ def simulate(
         task_error_units=probes.task_error_units,
         command_rate_limit=rate_limit,
         command_initial=initial,
+        plant=plant.kind,
+        dynamics=plant.series(n),
+        stopped=stopped,
     )

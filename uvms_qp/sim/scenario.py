@@ -21,6 +21,7 @@ every run gets a copy).
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -43,8 +44,12 @@ from ..stack import Stack
 from ..tasks import TASK_TYPES
 from .config import Table, did_you_mean, instantiate, join, keyword_arguments, read_toml
 from .current import ConstantCurrent
+from .dynamic_plant import DynamicPlant
 from .integrators import Integrator
 from .model_file import MODEL_KEYS, model_from_table
+from .plant_config import PLANT_KEYS, SENSOR_KEYS, PlantSpec, read_plant, read_sensors
+from .plants import KinematicPlant, Plant
+from .sensors import MeasurementChannel, Sensors
 from .stack_tables import (
     Event,
     StackTables,
@@ -71,7 +76,7 @@ _TOP_KEYS = (
     "name", "description", "model", "dt", "duration", "solver", "strict", "deadline", "damping",
     "metric",
     "schemes", "scheme_options", "integrator", "initial", "current", "passive", "trajectories",
-    "constraints", "levels", "events", "tracking", "phases",
+    "constraints", "levels", "events", "tracking", "phases", "plant", "sensors",
 )
 
 __all__ = [
@@ -189,6 +194,8 @@ class Scenario:
     source: Path | None
     stack_source: Callable[[], Stack] = field(repr=False)
     damping: float | None = None
+    plant: PlantSpec = field(default_factory=PlantSpec)
+    sensors: Sensors | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "q0", _read_only(self.q0))
@@ -215,7 +222,8 @@ class Scenario:
         """A :class:`~uvms_qp.controller.Controller` with this scenario's settings.
 
         The controller gets the scenario's ``dt``, ``metric``, ``strict``, ``deadline`` and
-        ``damping``.
+        ``damping``, and arm-vehicle coordination when the plant is dynamic and its
+        ``[plant]`` table asks for it.
 
         Args:
             solver: Override of the scenario's solver.
@@ -226,8 +234,55 @@ class Scenario:
             self.model, self.build_stack() if stack is None else stack,
             solver=solver or self.solver, dt=self.dt, metric=self.metric, strict=self.strict,
             deadline=self.deadline,
+            coordination=self.plant.kind == "dynamic" and self.plant.coordination,
             **({} if self.damping is None else {"damping": float(self.damping)}),  # type: ignore[arg-type]
         )
+
+    def make_plant(self, sensors: MeasurementChannel | None = None) -> Plant:
+        """A new plant for one run: :attr:`plant` ``kind`` decides kinematic or dynamic.
+
+        Args:
+            sensors: The run's measurement channel (the velocity the dynamic plant's loop
+                reads), or None for exact measurements.
+        """
+        if self.plant.kind == "kinematic":
+            return KinematicPlant(self.integrator, self.dt)
+        return DynamicPlant(self.model, self.plant, self.dt, self.current, sensors)
+
+    def with_plant(self, kind: str, path: str = "plant") -> Scenario:
+        """This scenario on another plant kind (``"kinematic"`` or ``"dynamic"``).
+
+        The dynamic plant takes the scenario's ``[plant]`` settings, or the defaults of the
+        model's parameter set when it has none.
+
+        Raises:
+            ConfigError: at ``path``: an unknown kind, or a model without dynamic data (the
+                message names what is missing).
+        """
+        try:
+            spec = self.plant.as_kind(kind, self.model)
+        except UvmsQpError as exc:
+            raise ConfigError(str(exc), path) from exc
+        scenario = dataclasses.replace(self, plant=spec)
+        scenario._check_plant(path)
+        return scenario
+
+    def _check_plant(self, path: str = "plant") -> None:
+        """Build the dynamic plant once (when it has parameters), so that bad settings fail now.
+
+        Checks that the parameters describe the model (a body per joint), that the thrusters can
+        produce every DOF the vehicle actuates, and that the servo period divides the control
+        period and the physics step the servo period.
+
+        Raises:
+            ConfigError: at ``path``, with the reason.
+        """
+        if self.plant.parameters is None:
+            return
+        try:
+            DynamicPlant(self.model, self.plant, self.dt, self.current)
+        except UvmsQpError as exc:
+            raise ConfigError(str(exc), path) from exc
 
     def with_duration(self, duration: Any, path: str = "duration") -> Scenario:
         """This scenario with another simulated time [s] (same step cap).
@@ -262,6 +317,8 @@ class Scenario:
         damping: float | None = None,
         schemes: Sequence[str] = ("hqp",),
         scheme_options: Mapping[str, Mapping[str, Any]] | None = None,
+        plant: PlantSpec | None = None,
+        sensors: Sensors | None = None,
     ) -> Scenario:
         """Assemble a scenario in code (no file), validated as a file would be.
 
@@ -288,6 +345,9 @@ class Scenario:
             damping: Damping threshold of the controller's levels (None: the library's).
             schemes: Schemes ``compare`` runs (``"hqp"`` is the stack).
             scheme_options: Keyword arguments of listed closed-form schemes, by scheme name.
+            plant: What the run drives (:class:`~uvms_qp.sim.plant_config.PlantSpec`); default
+                the kinematic plant.
+            sensors: Noise and delay of what the controller measures; default exact.
 
         Raises:
             InputError: invalid dt/duration/q0/deadline, an event naming an unknown task
@@ -348,6 +408,8 @@ class Scenario:
             task_names=tuple(level.names for level in check.levels),
             source=None,
             stack_source=source,
+            plant=plant or PlantSpec(),
+            sensors=sensors,
         )
         check.check_period(scenario.dt)  # the events are then checked against the period
         scenario._check_objects(check)
@@ -389,7 +451,7 @@ class Scenario:
         for i, name in enumerate(self.schemes):
             if name != "hqp":
                 build_scheme(name, self, join("schemes", i), stack=stack)
-        apply_events(self.events, stack)
+        apply_events(self.events, stack, self.dt)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -421,10 +483,12 @@ def resolve_scenario(source: str | Path) -> Path:
         candidate = resources.files(_SCENARIO_PACKAGE).joinpath(f"{name}.toml")
         if candidate.is_file():
             return Path(str(candidate))
-        listing = ", ".join(bundled_scenarios()) or "(none)"
+        known = bundled_scenarios()
+        close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ConfigError(
-            f"unknown scenario {name!r}: not a file and not a bundled scenario; "
-            f"bundled scenarios: {listing}"
+            f"unknown scenario {name!r}{hint}: not a file and not a bundled scenario; "
+            f"bundled scenarios: {', '.join(known) or '(none)'}"
         )
     raise ConfigError(f"scenario file not found: {path}")
 
@@ -474,7 +538,8 @@ def _read_model(top: Table, base: Path) -> Model:
 
 
 def _initial_configuration(table: Table | None, model: Model) -> FloatArray:
-    eta0, joints0 = model.split(model.neutral())
+    """``q0``: the model's home (vehicle at the origin, home joint angles), or ``[initial]``."""
+    eta0, joints0 = model.split(model.home())
     eta = np.array(eta0, dtype=np.float64)
     joints = np.array(joints0, dtype=np.float64)
     path = "initial"
@@ -680,6 +745,9 @@ def scenario_from_dict(
     events = read_events(top, duration, stack, resolver)
     tracking, reference = _tracking(top, stack, tables)
     phases = _read_phases(top, duration)
+    base = source.parent if source is not None else Path.cwd()
+    plant = read_plant(top.take_table("plant", keys=PLANT_KEYS), model, base)
+    sensors = read_sensors(top.take_table("sensors", keys=SENSOR_KEYS))
     top.finish()
     scenario = Scenario(
         name=scenario_name,
@@ -705,8 +773,11 @@ def scenario_from_dict(
         source=source,
         stack_source=tables,
         damping=damping,
+        plant=plant,
+        sensors=sensors,
     )
     check_periods(tables, stack, dt)
+    scenario._check_plant()
     scenario._check_objects(stack)
     try:
         controller = scenario.make_controller(stack=stack)

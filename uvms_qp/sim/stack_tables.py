@@ -21,7 +21,8 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import ConfigError, UvmsQpError
-from ..stack import Level, Stack
+from ..stack import Level, Stack, as_activation
+from ..tasks.task import STACK_KEYS
 from .config import (
     NOT_HANDLED,
     Table,
@@ -48,6 +49,9 @@ def _fresh(value: Any) -> Any:
 class Event:
     """A run-time parameter change: at ``time`` [s], ``task.update(**update)``.
 
+    The keys ``activation`` and ``ramp`` go to the task's stack entry instead
+    (:meth:`~uvms_qp.stack.Stack.set_activation`).
+
     Attributes:
         time: When the event fires [s] (at the first step with ``t >= time``).
         task: Name of the task to update.
@@ -64,8 +68,19 @@ class Event:
         object.__setattr__(self, "update", MappingProxyType(dict(self.update)))
 
     def apply(self, stack: Stack) -> None:
-        """``task.update(**update)`` on the task of ``stack`` named :attr:`task`."""
-        stack.task(self.task).update(**{key: _fresh(v) for key, v in self.update.items()})
+        """``task.update(**update)`` on the task of ``stack`` named :attr:`task` (all or nothing).
+
+        ``activation`` and ``ramp`` are set with ``stack.set_activation`` once the rest is
+        accepted (the activation is validated first).
+        """
+        entry = {key: v for key, v in self.update.items() if key in STACK_KEYS}
+        if "activation" in entry:
+            as_activation(entry["activation"], f"{self.task}.activation")
+        params = {key: _fresh(v) for key, v in self.update.items() if key not in STACK_KEYS}
+        if params:
+            stack.task(self.task).update(**params)
+        if entry:
+            stack.set_activation(self.task, **entry)
 
 
 @dataclass(frozen=True)
@@ -76,11 +91,13 @@ class Item:
         cls: The task or constraint class.
         kwargs: Keyword arguments of its constructor (converted; trajectories resolved).
         path: Field path of its table (``levels[1].tasks[0]``).
+        activation: A task's initial activation in its stack (None: 1).
     """
 
     cls: type
     kwargs: Mapping[str, Any]
     path: str
+    activation: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kwargs", MappingProxyType(dict(self.kwargs)))
@@ -107,9 +124,14 @@ class StackTables:
     def __call__(self) -> Stack:
         """A new, unbound :class:`~uvms_qp.stack.Stack` (new task and constraint objects)."""
         damping = self.damping or (None,) * len(self.levels)
-        return Stack(levels=[Level(*(item.build() for item in level), damping=d)
-                             for level, d in zip(self.levels, damping, strict=True)],
-                     constraints=[item.build() for item in self.constraints])
+        stack = Stack(levels=[Level(*(item.build() for item in level), damping=d)
+                              for level, d in zip(self.levels, damping, strict=True)],
+                      constraints=[item.build() for item in self.constraints])
+        for level, items in zip(stack.levels, self.levels, strict=True):
+            for task, item in zip(level.tasks, items, strict=True):
+                if item.activation is not None:
+                    stack.set_activation(task.name, item.activation)
+        return stack
 
 
 def lookup_type(table: Table, registry: Mapping[str, type], kind: str) -> type:
@@ -125,6 +147,25 @@ def lookup_type(table: Table, registry: Mapping[str, type], kind: str) -> type:
             f"unknown {kind} type {type_name!r}; known {kind} types: {known}", table.at("type")
         )
     return registry[type_name]
+
+
+def task_class(table: Table, registry: Mapping[str, type]) -> type:
+    """The task class of a table: its ``type``, then its ``mode`` where modes are classes.
+
+    A type whose modes yield different kinds of rows picks the class of the mode
+    (``JointLimitTask.for_mode``).
+
+    Raises:
+        ConfigError: missing or unknown type or mode (the known ones are listed).
+    """
+    cls = lookup_type(table, registry, "task")
+    for_mode = getattr(cls, "for_mode", None)
+    if for_mode is None:
+        return cls
+    try:
+        return for_mode(table.data.get("mode"), table.data.get("name"))  # type: ignore[no-any-return]
+    except UvmsQpError as exc:
+        raise ConfigError(str(exc).split(": ", 1)[-1], table.at("mode")) from exc
 
 
 def read_trajectory(table: Table) -> Trajectory:
@@ -236,9 +277,11 @@ def read_stack(
         items: list[Item] = []
         tasks = []
         for table in task_tables:
-            cls = lookup_type(table, task_types, "task")
-            item = Item(cls, keyword_arguments(cls, table, resolver=resolver, kind="task"),
-                        table.path)
+            cls = task_class(table, task_types)
+            activation = table.take_number("activation", None, minimum=0.0, maximum=1.0)
+            item = Item(cls, keyword_arguments(cls, table, skip=("type", "activation"),
+                                               resolver=resolver, kind="task"),
+                        table.path, activation)
             task = instantiate(cls, item.kwargs, item.path)
             if task.name in items_by_name:
                 raise ConfigError(
@@ -265,6 +308,10 @@ def read_stack(
         stack.bind(model)
     except (UvmsQpError, ValueError) as exc:
         raise ConfigError(str(exc), "levels") from exc
+    for level, items_ in zip(stack.levels, level_items, strict=True):
+        for task, item in zip(level.tasks, items_, strict=True):
+            if item.activation is not None:
+                stack.set_activation(task.name, item.activation)
     for level, items_ in zip(stack.levels, level_items, strict=True):
         for task, item in zip(level.tasks, items_, strict=True):
             try:
@@ -300,8 +347,8 @@ def read_events(
             )
         task = stack.task(name)
         cls = type(task)
-        allowed = tuple(task.updatable())
-        hints = parameter_hints(cls)
+        allowed = (*task.updatable(), *STACK_KEYS)
+        hints = {**parameter_hints(cls), **dict.fromkeys(STACK_KEYS, float)}
         update: dict[str, Any] = {}
         for key, value in update_table.data.items():
             path = update_table.at(key)
@@ -319,12 +366,13 @@ def read_events(
     return tuple(events)
 
 
-def apply_events(events: Sequence[Event], stack: Stack) -> None:
+def apply_events(events: Sequence[Event], stack: Stack, dt: float | None = None) -> None:
     """Apply each event's update to its task of ``stack``, in the given order.
 
     Used once on the stack a scenario is checked on, so a value that only the bound task can
-    judge (a 2-coordinate ``position`` on a spatial model) fails when the scenario is loaded or
-    built, at the event's path, rather than when the event fires.
+    judge (a 2-coordinate ``position`` on a spatial model, a gain that would not settle at the
+    control period ``dt`` [s]) fails when the scenario is loaded or built, at the event's path,
+    rather than when the event fires.
 
     Raises:
         ConfigError: an update the task rejects, at the event's path.
@@ -332,6 +380,8 @@ def apply_events(events: Sequence[Event], stack: Stack) -> None:
     for event in events:
         try:
             event.apply(stack)
+            if dt is not None:
+                stack.task(event.task).check_period(dt)
         except (UvmsQpError, ValueError, TypeError) as exc:
             raise config_error_from(exc, event.path, list(event.update), event.update) from exc
 
@@ -339,8 +389,8 @@ def apply_events(events: Sequence[Event], stack: Stack) -> None:
 def check_periods(tables: StackTables, stack: Stack, dt: float) -> None:
     """Check every task of ``stack`` against the control period ``dt`` [s].
 
-    (:meth:`~uvms_qp.tasks.Task.set_period`: set-based rows whose gain overshoots, error tasks
-    whose error would never settle; the events applied afterwards are checked against ``dt``.)
+    (:meth:`~uvms_qp.tasks.Task.check_period`: set-based rows whose gain overshoots, error
+    tasks whose error would never settle; :func:`apply_events` checks the events.)
 
     Raises:
         ConfigError: at the task's field, e.g. ``levels[1].tasks[0].gain``.
@@ -348,6 +398,6 @@ def check_periods(tables: StackTables, stack: Stack, dt: float) -> None:
     for level, items in zip(stack.levels, tables.levels, strict=True):
         for task, item in zip(level.tasks, items, strict=True):
             try:
-                task.set_period(dt)
+                task.check_period(dt)
             except (UvmsQpError, ValueError) as exc:
                 raise _error(exc, item) from exc

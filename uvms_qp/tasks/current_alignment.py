@@ -9,7 +9,8 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar, as_vector
 from ..errors import InputError
-from .task import ErrorTask
+from .error_task import ErrorTask
+from .slot import TaskSlot
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
@@ -38,34 +39,20 @@ class CurrentAlignmentTask(ErrorTask):
         gain: Gain K [1/s].
         weight: Weight within the level.
         name: Task name (default ``"current_alignment"``).
-        activation: Initial activation in [0, 1] (1: in the stack; see
-            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "current_alignment"
     error_unit = "rad"
     rate_unit = "rad/s"
 
-    def __init__(
-        self,
-        *,
-        heading: float | None = None,
-        direction: list[float] | None = None,
-        offset: float = 0.0,
-        gain: float = 1.0,
-        weight: float = 1.0,
-        name: str | None = None,
-        activation: float = 1.0,
-    ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
-        self.offset = as_scalar(offset, f"{self.name}.offset")
+    def __init__(self, *, heading: float | None = None, direction: list[float] | None = None,
+                 offset: float = 0.0, gain: float = 1.0, weight: float = 1.0,
+                 name: str | None = None) -> None:
+        super().__init__(name=name, weight=weight, gain=gain)
+        self.offset = self._check("offset", offset)
         self.heading: float | None = None
-        if heading is not None and direction is not None:
-            raise InputError(f"{self.name}: give heading or direction, not both")
-        if heading is not None:
-            self._apply_update("heading", heading)
-        if direction is not None:
-            self._apply_update("direction", direction)
+        if heading is not None or direction is not None:
+            self.heading = self._target(heading, direction)["heading"]
         self._row: slice = slice(0, 0)
 
     def _bind(self, model: Model) -> int:
@@ -77,12 +64,32 @@ class CurrentAlignmentTask(ErrorTask):
         self._row = slice(row, row + 1)
         return 1
 
-    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+    def set_target(self, *, heading: float | None = None,
+                   direction: list[float] | None = None) -> None:
+        """Set the current direction: ``heading`` [rad] or the current's velocity ``direction``.
+
+        The scenario keys are the same (``update = { heading = 0.78 }``).
+
+        Raises:
+            InputError: neither or both given, a direction without a horizontal part.
+        """
+        self.heading = self._target(heading, direction)["heading"]
+
+    def _target(self, heading: Any, direction: Any) -> dict[str, float]:
+        """The heading [rad] of ``heading`` or ``direction`` (exactly one given)."""
+        if (heading is None) == (direction is None):
+            raise InputError(f"{self.name}: give heading or direction"
+                             + (", not both" if heading is not None else ""))
+        key, value = ("heading", heading) if heading is not None else ("direction", direction)
+        return {"heading": self._check(key, value)}
+
+    def error_rows(self, state: State, t: float, slot: TaskSlot
+                   ) -> tuple[FloatArray, FloatArray, None]:
         """``(J_psi, wrap(psi_c + offset - psi), None)``: the yaw row of ``J_eta`` (1, nv)."""
         heading = self.heading
         if heading is None:
             raise InputError(f"task {self.name!r}: current heading never set; pass heading= or "
-                             "direction=, or call update(heading=...)")
+                             "direction=, or call set_target(heading=...)")
         row = self._row
         e = (heading + self.offset - state.eta.item(row.start) + math.pi) % _TWO_PI - math.pi
         return state.vehicle_pose_jacobian()[row], np.array((e,)), None
@@ -91,17 +98,21 @@ class CurrentAlignmentTask(ErrorTask):
         """Parameters accepted by :meth:`update`."""
         return (*super().updatable(), "heading", "direction", "offset")
 
-    def _apply_update(self, key: str, value: Any) -> None:
-        if key == "heading":
-            self.heading = as_scalar(value, f"{self.name}.heading")
-        elif key == "direction":
+    def _checked(self, params: dict[str, Any]) -> dict[str, Any]:
+        values = {k: self._check(k, v) for k, v in params.items()
+                  if k not in ("heading", "direction")}
+        if "heading" in params or "direction" in params:
+            values.update(self._target(params.get("heading"), params.get("direction")))
+        return values
+
+    def _check(self, key: str, value: Any) -> Any:
+        if key in ("heading", "offset"):
+            return as_scalar(value, f"{self.name}.{key}")
+        if key == "direction":
             v = as_vector(value, f"{self.name}.direction")
             if v.shape[0] not in (2, 3):
                 raise InputError(f"{self.name}.direction: expected 2 or 3 values, got {v.shape[0]}")
             if math.hypot(v[0], v[1]) < 1e-12:
                 raise InputError(f"{self.name}.direction: horizontal part is zero, no heading")
-            self.heading = math.atan2(v[1], v[0])
-        elif key == "offset":
-            self.offset = as_scalar(value, f"{self.name}.offset")
-        else:
-            super()._apply_update(key, value)
+            return math.atan2(v[1], v[0])
+        return super()._check(key, value)

@@ -10,10 +10,21 @@ from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from ..model.selection import check_joint_list, compact_index, joint_indices
 from ._common import check_choice
-from .task import ErrorTask
+from .error_task import ErrorTask
+from .slot import TaskSlot
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
+
+
+class _Held(TaskSlot):
+    """The posture held at the first evaluation (``reference="activation"``)."""
+
+    __slots__ = ("held",)
+
+    def clear(self) -> None:
+        super().clear()
+        self.held: FloatArray | None = None
 
 
 class PostureTask(ErrorTask):
@@ -30,56 +41,53 @@ class PostureTask(ErrorTask):
         gain: Gain K [1/s], scalar or per joint.
         weight: Weight within the level.
         name: Task name (default ``"posture"``).
-        activation: Initial activation in [0, 1] (1: in the stack; see
-            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "posture"
+    Slot = _Held
     error_unit = "rad"
     rate_unit = "rad/s"
 
-    def __init__(
-        self,
-        *,
-        posture: list[float] | None = None,
-        reference: Literal["activation", "middle"] = "activation",
-        joints: list[str] | None = None,
-        gain: float | list[float] = 1.0,
-        weight: float = 1.0,
-        name: str | None = None,
-        activation: float = 1.0,
-    ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
+    def __init__(self, *, posture: list[float] | None = None,
+                 reference: Literal["activation", "middle"] = "activation",
+                 joints: list[str] | None = None, gain: float | list[float] = 1.0,
+                 weight: float = 1.0, name: str | None = None) -> None:
+        super().__init__(name=name, weight=weight, gain=gain)
         self.reference = check_choice(reference, ("activation", "middle"),
                                       f"{self.name}.reference")
         self.joints = check_joint_list(joints, f"{self.name}.joints")
-        self._posture_arg = None if posture is None else as_vector(posture, f"{self.name}.posture")
         self._idx = np.zeros(0, dtype=int)
+        self.posture: FloatArray | None = None if posture is None else self._check(
+            "posture", posture)
         self._jsel: Any = self._idx
-        self._q_ref: FloatArray | None = None
+        self._middle: FloatArray | None = None
+        self._fixed: FloatArray | None = None  # the reference when it is not held
         self._A = np.zeros((0, 0))
 
     def _bind(self, model: Model) -> int:
         idx = joint_indices(model, self.joints, f"{self.name}.joints")
         if idx.size == 0:
             raise InputError(f"{self.name}: model {model.name!r} has no arm joints")
-        if self._posture_arg is not None and self._posture_arg.shape[0] != idx.size:
+        if self.posture is not None and self.posture.shape[0] != idx.size:
             raise InputError(f"{self.name}.posture: expected {idx.size} angles, got "
-                             f"{self._posture_arg.shape[0]}")
-        if self._posture_arg is not None:
-            self._check_limits(self._posture_arg, model, idx)
-        if self._posture_arg is None and self.reference == "middle":
-            lo, hi = np.asarray(model.joint_lower)[idx], np.asarray(model.joint_upper)[idx]
-            if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
-                raise InputError(f"{self.name}: reference='middle' needs finite joint limits")
-            self._posture_arg = 0.5 * (lo + hi)
+                             f"{self.posture.shape[0]}")
+        if self.posture is not None:
+            self._check_limits(self.posture, model, idx)
+        lo, hi = np.asarray(model.joint_lower)[idx], np.asarray(model.joint_upper)[idx]
+        if self.posture is None and self.reference == "middle" and not (
+                np.isfinite(lo).all() and np.isfinite(hi).all()):
+            raise InputError(f"{self.name}: reference='middle' needs finite joint limits")
+        self._middle = 0.5 * (lo + hi) if self.reference == "middle" else None
         self._idx = idx
         self._jsel = None if idx.tolist() == list(range(model.n_joints)) else compact_index(idx)
         self._A = np.zeros((idx.size, model.nv))
         self._A[np.arange(idx.size), model.n_vehicle + idx] = 1.0
         self._A.setflags(write=False)
-        self._set_reference(self._posture_arg)
         return int(idx.size)
+
+    def _derive(self) -> None:
+        super()._derive()
+        self._fixed = self.posture if self.posture is not None else self._middle
 
     def _check_limits(self, posture: FloatArray, model: Model, idx: Any) -> None:
         """Reject a reference angle outside its joint's position limits (where it has any).
@@ -94,32 +102,36 @@ class PostureTask(ErrorTask):
         if outside is not None:
             raise InputError(f"{self.name}.posture: {outside[1]}")
 
-    def _set_reference(self, value: FloatArray | None) -> None:
-        """Set ``q_ref`` (a copy), or None."""
-        self._q_ref = None if value is None else value.copy()
+    def set_target(self, posture: Any) -> None:
+        """Set the reference posture ``q_ref`` [rad] of the selected joints (key ``posture``).
 
-    def _reset(self) -> None:
-        """Forget the activation posture."""
-        self._set_reference(self._posture_arg)
+        It replaces a held or mid-range reference.
 
-    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+        Raises:
+            InputError, ShapeError: the wrong number of angles, an angle outside its limits.
+        """
+        self.update(posture=posture)
+
+    def error_rows(self, state: State, t: float, slot: TaskSlot
+                   ) -> tuple[FloatArray, FloatArray, None]:
         """``(S, q_ref - q, None)`` on the selected joints [rad] (``S`` selects their columns)."""
         q = state.joints if self._jsel is None else state.joints[self._jsel]
-        if self._q_ref is None:
-            self._set_reference(q)
-        return self._A, self._q_ref - q, None  # type: ignore[operator]
+        q_ref = self._fixed
+        if q_ref is None:  # held: the posture at the first evaluation
+            q_ref = slot.held  # type: ignore[attr-defined]
+            if q_ref is None:
+                q_ref = slot.held = q.copy()  # type: ignore[attr-defined]
+        return self._A, q_ref - q, None
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
         return (*super().updatable(), "posture")
 
-    def _apply_update(self, key: str, value: Any) -> None:
+    def _check(self, key: str, value: Any) -> Any:
         if key == "posture":
             n = self._idx.size or None
-            posture = as_vector(value, f"{self.name}.posture", n)
+            posture = as_vector(value, f"{self.name}.posture", n).copy()
             if self.model is not None:
                 self._check_limits(posture, self.model, self._idx)
-            self._posture_arg = posture
-            self._set_reference(self._posture_arg)
-        else:
-            super()._apply_update(key, value)
+            return posture
+        return super()._check(key, value)

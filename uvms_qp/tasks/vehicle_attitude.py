@@ -10,7 +10,8 @@ from .._validation import FloatArray, as_scalar
 from ..errors import InputError
 from ..model.selection import compact_index
 from ._common import parse_axes, wrap_angle
-from .task import ErrorTask
+from .error_task import ErrorTask
+from .slot import TaskSlot
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model, State
@@ -30,34 +31,25 @@ class VehicleAttitudeTask(ErrorTask):
     Args:
         axes: ``["phi", "theta"]`` (default) or one of them.
         roll: Roll set point [rad] (default 0, level).
-        pitch: Pitch set point [rad] (default 0, level).
+        pitch: Pitch set point [rad] (default 0, level); both change with
+            :meth:`set_target`.
         gain: Gain K [1/s], scalar or per axis.
         weight: Weight within the level.
         name: Task name (default ``"vehicle_attitude"``).
-        activation: Initial activation in [0, 1] (1: in the stack; see
-            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "vehicle_attitude"
     error_unit = "rad"
     rate_unit = "rad/s"
 
-    def __init__(
-        self,
-        *,
-        axes: list[str] | None = None,
-        roll: float = 0.0,
-        pitch: float = 0.0,
-        gain: float | list[float] = 1.0,
-        weight: float = 1.0,
-        name: str | None = None,
-        activation: float = 1.0,
-    ) -> None:
-        super().__init__(name=name, weight=weight, gain=gain, activation=activation)
+    def __init__(self, *, axes: list[str] | None = None, roll: float = 0.0, pitch: float = 0.0,
+                 gain: float | list[float] = 1.0, weight: float = 1.0,
+                 name: str | None = None) -> None:
+        super().__init__(name=name, weight=weight, gain=gain)
         self.axes = parse_axes(axes if axes is not None else ["phi", "theta"], ("phi", "theta"),
                                f"{self.name}.axes")
-        self.roll = as_scalar(roll, f"{self.name}.roll")
-        self.pitch = as_scalar(pitch, f"{self.name}.pitch")
+        self.roll = self._check("roll", roll)
+        self.pitch = self._check("pitch", pitch)
         self._idx: Any = slice(0, 0)
         self._target = np.zeros(0)
 
@@ -71,13 +63,25 @@ class VehicleAttitudeTask(ErrorTask):
                                  f"{_ACTUATOR[a]!r} (actuated: {', '.join(model.actuated)}), so "
                                  f"{a} cannot be a task")
         self._idx = compact_index([model.eta_names.index(a) for a in self.axes])
-        self._set_point()
         return len(self.axes)
 
-    def _set_point(self) -> None:
+    def _derive(self) -> None:
+        super()._derive()
         self._target = np.array([self.roll if a == "phi" else self.pitch for a in self.axes])
 
-    def error_rows(self, state: State, t: float) -> tuple[FloatArray, FloatArray, None]:
+    def set_target(self, *, roll: float | None = None, pitch: float | None = None) -> None:
+        """Set the roll and/or pitch set point [rad] (scenario keys ``roll``, ``pitch``).
+
+        Raises:
+            InputError: no value, or one that is not a finite number.
+        """
+        given = {k: v for k, v in (("roll", roll), ("pitch", pitch)) if v is not None}
+        if not given:
+            raise InputError(f"{self.name}.set_target: give roll= and/or pitch= [rad]")
+        self.update(**given)
+
+    def error_rows(self, state: State, t: float, slot: TaskSlot
+                   ) -> tuple[FloatArray, FloatArray, None]:
         """``(J_eta,S, wrap(angle_d - angle)_S, None)`` on roll/pitch [rad]."""
         idx = self._idx
         e = self._target - state.eta[idx]
@@ -89,10 +93,7 @@ class VehicleAttitudeTask(ErrorTask):
         """Parameters accepted by :meth:`update`."""
         return (*super().updatable(), "roll", "pitch")
 
-    def _apply_update(self, key: str, value: Any) -> None:
+    def _check(self, key: str, value: Any) -> Any:
         if key in ("roll", "pitch"):
-            setattr(self, key, as_scalar(value, f"{self.name}.{key}"))
-            if self.model is not None:
-                self._set_point()
-        else:
-            super()._apply_update(key, value)
+            return as_scalar(value, f"{self.name}.{key}")
+        return super()._check(key, value)

@@ -8,6 +8,8 @@ import numpy as np
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError
+from ._checks import check_flag
+from .slot import TaskSlot
 from .task import Task
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -52,38 +54,18 @@ class VehicleMotionTask(Task):
         include_arm: Also emit the arm joint-rate rows.
         weight: Weight within the level.
         name: Task name (default ``"vehicle_motion"``).
-        activation: Initial activation in [0, 1] (1: in the stack; see
-            :class:`~uvms_qp.tasks.Task`).
     """
 
     type_name = "vehicle_motion"
     error_unit = "m/s, rad/s"
     rate_unit = "m/s, rad/s"
 
-    def __init__(
-        self,
-        *,
-        beta: float = 0.5,
-        w_max: float = 1.0,
-        include_arm: bool = True,
-        weight: float = 1.0,
-        name: str | None = None,
-        activation: float = 1.0,
-    ) -> None:
-        super().__init__(name=name, weight=weight, activation=activation)
-        if not isinstance(include_arm, bool):
-            raise InputError(f"{self.name}.include_arm: expected true or false")
-        self.beta = as_scalar(beta, f"{self.name}.beta")
-        self.w_max = as_scalar(w_max, f"{self.name}.w_max", positive=True)
-        self.include_arm = include_arm
-
-        class _Probe:  # validate beta / w_max now, not at bind
-            nv, n_vehicle = 1, 1
-
-        try:
-            motion_distribution_weights(_Probe, self.beta, self.w_max)
-        except InputError as exc:
-            raise InputError(f"{self.name}.{exc}") from None
+    def __init__(self, *, beta: float = 0.5, w_max: float = 1.0, include_arm: bool = True,
+                 weight: float = 1.0, name: str | None = None) -> None:
+        super().__init__(name=name, weight=weight)
+        self.include_arm = check_flag(include_arm, f"{self.name}.include_arm")
+        self.beta = self._check("beta", beta)
+        self.w_max = self._check("w_max", w_max)
         self._A = np.zeros((0, 0))
 
     def _bind(self, model: Model) -> int:
@@ -94,32 +76,30 @@ class VehicleMotionTask(Task):
         self._A.setflags(write=False)
         return m
 
-    def _update_row_weights(self) -> None:
-        model = self.model
-        if model is None:
-            return
+    def _derive(self) -> None:
+        super()._derive()
         if self.include_arm:
-            self.row_weights = self.weight * motion_distribution_weights(model, self.beta,
-                                                                          self.w_max)
+            self.row_weights = self.weight * motion_distribution_weights(
+                self.model, self.beta, self.w_max)
 
-    def evaluate(self, state: State, t: float) -> tuple[FloatArray, float, float]:
-        """``zeta_i = 0`` on the vehicle (and arm) rows (no error: ``last_error`` stays None)."""
+    def evaluate(self, state: State, t: float, slot: TaskSlot) -> tuple[FloatArray, float, float]:
+        """``zeta_i = 0`` on the vehicle (and arm) rows (no error: ``slot.error`` stays None)."""
         return self._A, 0.0, 0.0
 
     def updatable(self) -> tuple[str, ...]:
         """Parameters accepted by :meth:`update`."""
         return (*super().updatable(), "beta", "w_max")
 
-    def _apply_update(self, key: str, value: Any) -> None:
-        if key in ("beta", "w_max"):
-            beta = value if key == "beta" else self.beta
-            w_max = value if key == "w_max" else self.w_max
-
-            class _Probe:
-                nv, n_vehicle = 1, 1
-
-            motion_distribution_weights(_Probe, beta, w_max)
-            self.beta, self.w_max = float(beta), float(w_max)
-            self._update_row_weights()
-        else:
-            super()._apply_update(key, value)
+    def _check(self, key: str, value: Any) -> Any:
+        if key == "beta":
+            beta = as_scalar(value, f"{self.name}.beta")
+            if not 0.0 < beta < 1.0:
+                raise InputError(f"{self.name}.beta: expected 0 < beta < 1, got {beta} (use hard "
+                                 "vehicle rate bounds of zero to forbid vehicle motion)")
+            return beta
+        if key == "w_max":
+            w_max = as_scalar(value, f"{self.name}.w_max", positive=True)
+            if w_max > 1.0:
+                raise InputError(f"{self.name}.w_max: expected 0 < w_max <= 1, got {w_max}")
+            return w_max
+        return super()._check(key, value)

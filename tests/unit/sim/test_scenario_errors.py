@@ -14,6 +14,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -507,3 +508,26 @@ def test_event_update_with_three_coordinates_loads():
                     "update = { force = 10.0 }" + EVENT.format("position = [0.5, 0.1, 0.2]"))
     scenario = load_text(text)
     assert scenario.events[1].update == {"position": [0.5, 0.1, 0.2]}
+
+
+def test_a_mistyped_bundled_scenario_name_suggests_the_close_one():
+    with pytest.raises(ConfigError, match=r"unknown scenario 'bluerov_demo' \(did you mean "
+                                          r"'bluerov2_demo'\?\)"):
+        load_scenario("bluerov_demo")
+
+
+def test_a_scenario_without_initial_starts_at_the_models_home():
+    """Not at zero joint angles clipped into the limits (a singular arm for some models)."""
+    data = tomllib.loads(BASE)
+    del data["initial"]
+    scenario = scenario_from_dict(data)
+    np.testing.assert_array_equal(scenario.q0, scenario.model.home())
+    assert not np.array_equal(scenario.q0, scenario.model.neutral())
+
+
+def test_a_task_key_of_another_mode_names_the_keys_of_this_mode():
+    data = tomllib.loads(BASE)
+    data["levels"][1]["tasks"][1]["normalize"] = True  # a key of the "reduce" payload task
+    with pytest.raises(ConfigError, match=r"levels\[1\]\.tasks\[1\]\.normalize: unknown key "
+                                          r"'normalize'.*maximum"):
+        scenario_from_dict(data)

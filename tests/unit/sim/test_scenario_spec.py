@@ -78,7 +78,7 @@ def test_the_specification_cannot_be_changed(small):
 def test_each_stack_is_new_bound_and_unchanged_by_runs(small):
     first, second = small.build_stack(), small.build_stack()
     assert first.task("payload") is not second.task("payload")
-    assert first.model is small.model and first.task("payload").is_bound
+    assert first.model is small.model and first.task("payload").model is not None
     simulate(small, stack=first)
     assert first.task("payload").force == 5.0  # the event fired on this run's task
     assert small.build_stack().task("payload").force == 0.0
@@ -130,6 +130,6 @@ def test_code_built_stack_is_a_template_or_a_factory():
     simulate(scenario, stack=stack)
     assert stack.task("payload").force == 3.0 and given.task("payload").force == 0.0
     made = Scenario.build(model, lambda: _stack(goal), q0, dt=0.1, duration=0.5)
-    assert made.task_names == (("end_effector",), ("payload",))
+    assert made.task_names == (("tool",), ("payload",))
     with pytest.raises(uvms_qp.InputError, match="stack: expected a Stack"):
         Scenario.build(model, 3, q0, dt=0.1, duration=0.5)

@@ -108,8 +108,9 @@ def test_margin_rows_on_a_joint_subset_and_outside_the_limits(rov):
         eta, _ = rov.split(rov.random_configuration(rng))
         joints = rng.uniform(rov.joint_lower - 0.2 * span, rov.joint_upper + 0.2 * span)
         state = rov.state(rov.configuration(eta, joints))
-        rows = task.rows(state)
+        slot = task.new_slot()
+        rows = task.rows(state, slot=slot)
         q = state.joints[idx]
         np.testing.assert_allclose(rows.lower, 1.5 * (lo_lim + 0.1 - q), rtol=1e-14)
         np.testing.assert_allclose(rows.upper, 1.5 * (hi_lim - 0.1 - q), rtol=1e-14)
-        assert task.last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()
+        assert slot.last_error[0] == np.minimum(q - lo_lim, hi_lim - q).min()

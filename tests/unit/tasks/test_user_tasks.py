@@ -8,7 +8,7 @@ import pytest
 from uvms_qp.controller import Controller
 from uvms_qp.errors import ShapeError
 from uvms_qp.stack import Level, Stack
-from uvms_qp.tasks.task import ErrorTask, Task
+from uvms_qp.tasks import ErrorTask, Task
 
 
 class DepthTask(ErrorTask):
@@ -26,7 +26,7 @@ class DepthTask(ErrorTask):
         self._row = model.eta_names.index("z")
         return self.n_rows
 
-    def error_rows(self, state, t):
+    def error_rows(self, state, t, slot):
         J = np.repeat(state.vehicle_pose_jacobian()[self._row:self._row + 1], self.n_rows, 0)
         e = np.full(self.n_rows, 0.5 - state.eta[self._row])
         if self.defect == "one_row":  # numpy would broadcast these into every row
@@ -59,7 +59,7 @@ class SurgeFloor(Task):
     def _bind(self, model):
         return 1
 
-    def evaluate(self, state, t):
+    def evaluate(self, state, t, slot):
         J = np.zeros((1, self.model.nv))
         J[0, 0] = 1.0
         lower = np.zeros(2) if self.defect == "sides" else np.zeros(1)

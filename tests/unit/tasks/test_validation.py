@@ -153,15 +153,17 @@ def test_station_keeping_holds_the_whole_actuated_pose_by_default(rov):
 def test_station_keeping_holds_activation_pose(rov):
     rng = np.random.default_rng(0)
     task = StationKeepingTask(gain=2.0).bind(rov)
+    slot = task.new_slot()  # the memory of one controller
     q0 = rov.random_configuration(rng)
-    rows0 = task.rows(rov.state(q0))
+    rows0 = task.rows(rov.state(q0), slot=slot)
     np.testing.assert_allclose(rows0.lower, 0.0, atol=1e-15)
     q1 = rov.integrate(q0, np.r_[0.3, 0, 0, 0, 0, 0.2, 0, 0, 0, 0], 1.0)
-    e = task.compute_error(rov.state(q1), 0.0)
+    e = task.compute_error(rov.state(q1), 0.0, slot)
     eta0, eta1 = rov.split(q0)[0], rov.split(q1)[0]
     np.testing.assert_allclose(e, eta0 - eta1, atol=1e-12)  # all six: roll and pitch actuated
-    task.reset()
-    np.testing.assert_allclose(task.compute_error(rov.state(q1), 0.0), 0.0)
+    slot.clear()
+    np.testing.assert_allclose(task.compute_error(rov.state(q1), 0.0, slot), 0.0)
+    np.testing.assert_allclose(task.compute_error(rov.state(q1), 0.0), 0.0)  # a new slot
     current = StationKeepingTask(hold="current").bind(rov)
     np.testing.assert_allclose(current.compute_error(rov.state(q1), 0.0), 0.0)
 
@@ -181,13 +183,14 @@ def test_shaping_sign_switch(rov):
     rng = np.random.default_rng(1)
     q0 = rov.home()
     w0, g0 = task.compute_value(rov.state(q0))
-    first = task.rows(rov.state(q0), 0.0)
+    slot = task.new_slot()
+    first = task.rows(rov.state(q0), 0.0, slot)
     np.testing.assert_allclose(first.lower, g0)  # k = 1 (w << threshold), w_dot = 0 -> active
     zeta = np.zeros(rov.nv)
     zeta[6:] = g0 / np.linalg.norm(g0) * 0.1  # increase w
     q1 = rov.integrate(q0, zeta, 0.1)
     assert task.compute_value(rov.state(q1))[0] > w0
-    rows = task.rows(rov.state(q1), 0.1)
+    rows = task.rows(rov.state(q1), 0.1, slot)
     np.testing.assert_allclose(rows.lower, 0.0)  # switched off while w grows
     del rng
 
@@ -268,8 +271,8 @@ def test_two_value_point_on_a_planar_model_has_zero_depth(rov):
 @pytest.mark.parametrize(
     ("make", "match"),
     [
-        (lambda: EndEffectorTask(mode=["position"]), r"end_effector\.mode: expected one of"),
-        (lambda: EndEffectorTask(mode={"pose": 1}), r"end_effector\.mode: expected one of"),
+        (lambda: EndEffectorTask(mode=["position"]), r"tool\.mode: expected one of"),
+        (lambda: EndEffectorTask(mode={"pose": 1}), r"tool\.mode: expected one of"),
         (lambda: JointLimitTask(mode=np.array(["margin", "damping"])),
          r"joint_limit\.mode: expected one of"),
         (lambda: StationKeepingTask(hold=np.array(["activation", "current"])),
@@ -277,7 +280,7 @@ def test_two_value_point_on_a_planar_model_has_zero_depth(rov):
         (lambda: ManipulabilityTask(mode=["floor"]), r"manipulability\.mode: expected one of"),
         (lambda: PayloadMomentTask(mode=("bound",)), r"payload_moment\.mode: expected one of"),
         (lambda: PostureTask(reference=[0.0]), r"posture\.reference: expected one of"),
-        (lambda: EndEffectorTask(hold=True), r"end_effector\.hold: expected one of 'activation'"),
+        (lambda: EndEffectorTask(hold=True), r"tool\.hold: expected one of 'activation'"),
     ],
 )
 def test_a_choice_that_is_not_a_string_is_an_input_error(make, match):
@@ -289,16 +292,17 @@ def test_a_choice_that_is_not_a_string_is_an_input_error(make, match):
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
-        ({"target": np.eye(3)}, ShapeError, r"end_effector\.target: expected 4 rows"),
+        ({"target": np.eye(3)}, ShapeError, r"tool\.target: expected 4 rows"),
         ({"target": np.diag([1.0, 1.0, 1.0, 2.0])}, InputError, "bottom row"),
         ({"target": np.diag([1.0, 2.0, 1.0, 1.0])}, InputError, "not a rotation matrix"),
         ({"target": np.diag([1.0, 1.0, -1.0, 1.0])}, InputError, "reflection"),
         ({"target": {"xyz": [0, 0, 0], "rotation": 0}}, InputError, "unknown keys"),
-        ({"target": "tool"}, InputError, r"end_effector\.target: expected real numbers"),
+        ({"target": "tool"}, InputError, r"tool\.target: expected real numbers"),
         ({"target": np.eye(4), "position": [0, 0, 0]}, InputError, "not both"),
-        ({"hold": "activation", "position": [0, 0, 0]}, InputError, "do not also give position"),
+        ({"hold": "activation", "position": [0, 0, 0]}, InputError,
+         "give one target: hold, position exclude each other"),
         ({"reference": "tool"}, InputError, "the controlled frame itself"),
-        ({"reference": 3}, InputError, r"end_effector\.reference: expected a frame name"),
+        ({"reference": 3}, InputError, r"tool\.reference: expected a frame name"),
     ],
 )
 def test_end_effector_targets_are_validated(kwargs, error, match):
@@ -336,17 +340,24 @@ def test_holding_takes_the_pose_of_the_first_evaluation(rov):
     rng = np.random.default_rng(2)
     s0, s1 = (rov.state(rov.random_configuration(rng)) for _ in range(2))
     task = EndEffectorTask(mode="pose", reference="vehicle", hold="activation").bind(rov)
-    assert task.has_target and task.target(0.0) == (None, None)
-    np.testing.assert_allclose(task.compute_error(s0, 0.0), 0.0, atol=1e-12)  # here: held
+    slot = task.new_slot()  # the memory of one controller
+    assert task.has_target and task.target(0.0, slot=slot) == (None, None)
+    np.testing.assert_allclose(task.compute_error(s0, 0.0, slot), 0.0, atol=1e-12)  # held
     held = s0.pose_in("tool", "vehicle")
-    np.testing.assert_allclose(task.target(0.0)[0], held[:3, 3])
-    assert np.abs(task.compute_error(s1, 0.1)).max() > 1e-3  # moved away: error
+    np.testing.assert_allclose(task.target(0.0, slot=slot)[0], held[:3, 3])
+    assert np.abs(task.compute_error(s1, 0.1, slot)).max() > 1e-3  # moved away: error
     T_v = s1.pose("vehicle")  # the held point, carried by the vehicle, in world coordinates
-    np.testing.assert_allclose(task.target(0.1, s1)[0], T_v[:3, :3] @ held[:3, 3] + T_v[:3, 3])
-    task.reset()  # re-armed: the next evaluation holds again
-    np.testing.assert_allclose(task.compute_error(s1, 0.2), 0.0, atol=1e-12)
-    task.update(position=[0.5, 0.0, 0.0])  # an explicit target ends holding
-    assert task.hold is None
+    np.testing.assert_allclose(task.target(0.1, s1, slot)[0],
+                               T_v[:3, :3] @ held[:3, 3] + T_v[:3, 3])
+    other = task.new_slot()  # another controller holds its own pose
+    np.testing.assert_allclose(task.compute_error(s1, 0.2, other), 0.0, atol=1e-12)
+    assert np.abs(task.compute_error(s1, 0.2, slot)).max() > 1e-3
+    slot.clear()  # re-armed: the next evaluation holds again
+    np.testing.assert_allclose(task.compute_error(s1, 0.2, slot), 0.0, atol=1e-12)
+    task.set_target(hold="activation")  # a new hold: every slot takes the pose again
+    np.testing.assert_allclose(task.compute_error(s0, 0.3, other), 0.0, atol=1e-12)
+    task.update(position=[0.5, 0.0, 0.0], rotation=np.eye(3))  # a fixed target ends holding
+    assert task.compute_error(s0, 0.3, slot)[:3].tolist() != [0.0, 0.0, 0.0]
 
 
 # ------------------------------------------- trajectories and axes bound to a model
@@ -384,7 +395,7 @@ def test_a_planar_trajectory_is_rejected_on_a_spatial_model(spatial, planar, tra
     # tracking it after binding is rejected too, and the previous target is kept
     bound = EndEffectorTask(position=[0.5, 0.1, 0.2], name="tool").bind(spatial)
     with pytest.raises(ShapeError, match=SPATIAL):
-        bound.track(trajectory)
+        bound.set_target(trajectory=trajectory)
     np.testing.assert_allclose(bound.target(0.0)[0], [0.5, 0.1, 0.2])
     # a planar model accepts it
     EndEffectorTask(trajectory=trajectory, name="tool").bind(planar)
