@@ -8,8 +8,7 @@ parts timed:
 
 - plant: the physics steps (equations of motion, fourth-order Runge-Kutta) and the thrusters'
   dead band, lag and power;
-- servos: the velocity loop and the thrust allocation (once per servo tick), and the joint torque
-  record (one evaluation of the equations per servo tick);
+- servos: the velocity loop and the thrust allocation (once per servo tick);
 - QP: the controller's steps;
 - the rest: the runner (events, probes, bound checks, records).
 
@@ -35,8 +34,7 @@ from uvms_qp.sim.scenario import load_scenario
 
 PARTS = {
     "plant": [(FloatingPlant, "step"), (ThrusterDynamics, "step")],
-    "servos": [(VelocityLoop, "step"), (ThrustAllocator, "allocate"),
-               (FloatingPlant, "accelerations")],
+    "servos": [(VelocityLoop, "step"), (ThrustAllocator, "allocate")],
     "QP": [(Controller, "step")],
 }
 
@@ -77,7 +75,6 @@ def split(sc: Any) -> dict[str, float]:
         for cls, name in methods:
             wrap(cls, name, part)
     try:
-        # the torque record calls accelerations; a physics step calls the private evaluation
         wall, _ = timed_run(sc)
     finally:
         for cls, name, original in originals:

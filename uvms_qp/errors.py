@@ -121,6 +121,14 @@ class NoSolutionFound(SolverError):
     """No verified solution could be produced; ``result`` keeps the failed problem."""
 
 
+class ScenarioWarning(UserWarning):
+    """A scenario loads and runs, but likely not as its author meant (the message says why).
+
+    Filter it like any warning: ``warnings.simplefilter("ignore", ScenarioWarning)``; the
+    command line prints it as one ``warning:`` line.
+    """
+
+
 class ParameterError(ConfigError):
     """A physical parameter of a plant is invalid (negative mass, indefinite matrix, bad shape).
 

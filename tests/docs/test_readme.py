@@ -1,6 +1,8 @@
 """The README's Python example runs as written and does what it says."""
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -59,3 +61,24 @@ def test_demo_summary_reads_as_success(tmp_path, capsys):
     assert set(statuses) == {"optimal"}, counts[0]
     stages = [line for line in out.splitlines() if line.strip().startswith("stage_counts")]
     assert stages and "primary" in stages[0] and "zero" not in stages[0], stages
+
+
+#: How far the README's test count may lag the collected count before this test asks for the
+#: new number (tests added by later changes move it a little; a stale paragraph moves it more).
+COUNT_TOLERANCE = 0.03
+
+
+def test_readme_states_the_collected_number_of_tests():
+    """The README says how many tests the suite has: the number ``pytest --collect-only``
+    collects (within a few percent, so that adding a test does not fail the suite)."""
+    stated = re.findall(r"The suite has (\d+) tests", README.read_text())
+    assert len(stated) == 1, "the README states the number of tests once"
+    proc = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q",
+                           "-p", "no:cacheprovider"], cwd=README.parent, capture_output=True,
+                          text=True, timeout=600, check=False)
+    assert proc.returncode == 0, proc.stdout[-2000:]
+    last = proc.stdout.strip().splitlines()[-1]
+    collected = int(re.fullmatch(r"(\d+) tests collected.*", last).group(1))  # type: ignore[union-attr]
+    assert abs(int(stated[0]) - collected) <= COUNT_TOLERANCE * collected, (
+        f"the README says {stated[0]} tests, the suite collects {collected}: update the README "
+        "with the last line of `python -m pytest --collect-only -q`")

@@ -24,12 +24,14 @@ def scenario_data(name: str) -> dict[str, Any]:
 def variant(name: str, **changes: Any) -> Scenario:
     """Bundled scenario ``name`` with top-level keys replaced (e.g. ``dt``, ``duration``).
 
-    A shorter ``duration`` drops the phases and events (they may lie past its end).
+    A shorter ``duration`` drops the phases and events (they may lie past its end), and the
+    plant's payload, which is taken at a time.
     """
     data = scenario_data(name)
     if "duration" in changes and changes["duration"] < data["duration"]:
         for key in TIMED:
             data.pop(key, None)
+        data.get("plant", {}).pop("payload", None)
     data.update(changes)
     return scenario_from_dict(data, name=f"{name}_variant")
 

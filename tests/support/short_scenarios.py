@@ -1,5 +1,5 @@
-"""Bundled scenarios shortened for fast tests: a shorter top-level ``duration``, and no phases or
-events (they may lie beyond the new end)."""
+"""Bundled scenarios shortened for fast tests: a shorter top-level ``duration``, and no phases,
+events or plant payload (they may lie beyond the new end)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from uvms_qp.sim.scenario import bundled_scenarios, load_scenario
 
 _DURATION = re.compile(r"^duration\s*=\s*[0-9.eE+-]+", re.MULTILINE)
 _HEADER = re.compile(r"^\[", re.MULTILINE)
-_DROPPED = ("[[phases]]", "[[events]]", "[events.", "[phases.")
+_DROPPED = ("[[phases]]", "[[events]]", "[events.", "[phases.", "[plant.payload]")
 
 
 def _without_timed_tables(text: str) -> str:

@@ -240,38 +240,62 @@ def _terminal_cells(row: list[str]) -> list[str]:
     return [cells[h] for h in TERMINAL_HEADERS]
 
 
+#: Space between two columns of the terminal table.
+_GAP = "  "
+
+
+def _row_lines(name: str, numbers: str, name_width: int) -> list[str]:
+    """One row of the terminal table as lines.
+
+    The name and its numbers on one line, or, for a name longer than the solver column, the
+    whole name on a line of its own and the numbers on the next one.
+    """
+    if len(name) <= name_width:
+        return [f"{name.ljust(name_width)}{_GAP}{numbers}"]
+    return [name, f"{' ' * name_width}{_GAP}{numbers}"]
+
+
 def print_table(summaries: list[Summary], console: Any = None, title: str = "") -> None:
     """Print the compact terminal table (one section per set) and the attributed failures.
 
-    The table has the columns :data:`TERMINAL_HEADERS` and fits :data:`TERMINAL_WIDTH`
-    characters; :func:`markdown_table` and the CSV store have every column.
+    The table has the columns :data:`TERMINAL_HEADERS` and fits the console's width (at most
+    :data:`TERMINAL_WIDTH` characters from the command line); :func:`markdown_table` and the CSV
+    store have every column. A name is never split: one longer than the room the numbers leave
+    takes a line of its own, its numbers the next line.
     """
-    from rich import box
     from rich.console import Console
-    from rich.table import Table
+    from rich.text import Text
 
     console = console or Console(width=TERMINAL_WIDTH)
-    table = Table(title=title or "uvms-qp bench", header_style="bold", box=box.SIMPLE_HEAD,
-                  pad_edge=False, show_edge=False, collapse_padding=True, title_justify="left")
-    for h in TERMINAL_HEADERS:
-        if h == "solver":  # a long scheme name folds onto a second line; numbers never do
-            table.add_column(h, justify="left", overflow="fold", ratio=1)
-        else:
-            table.add_column(h, justify="right", no_wrap=True)
+    shown = [s for s in summaries if s.trials]
+    cells = [_terminal_cells(row) for row in table_rows(summaries)]
+    widths = [max([len(h), *(len(c[i]) for c in cells)]) for i, h in enumerate(TERMINAL_HEADERS)]
+    numbers_width = sum(widths[1:]) + len(_GAP) * (len(widths) - 2)
+    room = console.width - numbers_width - len(_GAP)
+    name_width = max([len(TERMINAL_HEADERS[0]), *(len(s.set) for s in shown),
+                      min(widths[0], room)])
+
+    def numbers(row: list[str]) -> str:
+        return _GAP.join(cell.rjust(w) for cell, w in zip(row[1:], widths[1:], strict=True))
+
+    console.print(title or "uvms-qp bench", markup=False, highlight=False)
+    console.print(Text(_row_lines(TERMINAL_HEADERS[0], numbers(list(TERMINAL_HEADERS)),
+                                  name_width)[0], style="bold"))
+    console.print("\u2500" * (name_width + len(_GAP) + numbers_width), markup=False)
     previous = None
-    for row, s in zip(table_rows(summaries), [s for s in summaries if s.trials], strict=True):
+    for row, s in zip(cells, shown, strict=True):
         if s.set != previous:
             if previous is not None:
-                table.add_section()
-            table.add_row(f"[bold]{s.set}[/bold]", *[""] * (len(TERMINAL_HEADERS) - 1))
+                console.print()
+            console.print(Text(s.set, style="bold"))
         previous = s.set
-        style = None
+        style = ""
         if s.success_rate < 1.0:
             style = "yellow"
         if s.claimed_violation > HARD_TOL or s.nan_count:
             style = "red"
-        table.add_row(*_terminal_cells(row), style=style)
-    console.print(table)
+        for line in _row_lines(row[0], numbers(row), name_width):
+            console.print(Text(line, style=style), soft_wrap=True)
     console.print("success = verified/trials (Nu: N failures are answers inside the hard set that "
                   "the optimality certificate could not prove); x daqp = "
                   "per-problem time ratio to daqp (median); "

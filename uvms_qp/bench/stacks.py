@@ -122,7 +122,7 @@ def random_bounds(model: Any, rng: np.random.Generator) -> list[Any]:
 
 def random_stack(model: Any, state: Any, rng: np.random.Generator,
                  constraints: list[Any]) -> Stack:
-    """A random mission stack: the tool task first in level 1, then 1-5 levels of mixed tasks.
+    """A random mission stack: the tool task first in level 0, then 1-5 levels of mixed tasks.
 
     The tool task (position, or pose on spatial vehicles 40 % of the time) tracks a target about
     0.3 m from the tool. The other tasks, shuffled, fill the remaining levels one each, and the

@@ -3,7 +3,9 @@
 Each sub-command lives in its own module of this package and exposes
 ``register(subparsers) -> argparse.ArgumentParser`` which sets ``func=run`` on its parser.
 Adding a command is a one-file change: the modules are discovered at start-up. Any error of the
-input (a scenario file, a model file, an option) is one line on stderr and exit status 2.
+input (a scenario file, a model file, an option) is one line on stderr and exit status 2; a
+scenario that loads but likely not as meant (:class:`~uvms_qp.errors.ScenarioWarning`) is one
+``warning:`` line on stderr, and the command goes on.
 """
 
 from __future__ import annotations
@@ -13,11 +15,12 @@ import importlib
 import os
 import pkgutil
 import sys
+import warnings
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from .. import __version__
-from ..errors import UvmsQpError
+from ..errors import ScenarioWarning, UvmsQpError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -71,10 +74,25 @@ def _main(argv: Sequence[str] | None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", ScenarioWarning)
+            warnings.showwarning = _warning_line(args.command, warnings.showwarning)
+            return int(args.func(args) or 0)
     except UvmsQpError as exc:
         print(f"uvms-qp {args.command}: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
+
+
+def _warning_line(command: str, show: Any) -> Any:
+    """``warnings.showwarning`` that prints a :class:`ScenarioWarning` as one line on stderr."""
+
+    def show_warning(message: Any, category: type[Warning], *args: Any, **kwargs: Any) -> None:
+        if issubclass(category, ScenarioWarning):
+            print(f"uvms-qp {command}: warning: {one_line(str(message))}", file=sys.stderr)
+        else:
+            show(message, category, *args, **kwargs)
+
+    return show_warning
 
 
 def one_line(message: str) -> str:

@@ -3,11 +3,13 @@
 Runs the scenario's HQP stack and each closed-form scheme listed in its ``schemes`` (the papers'
 redundancy resolutions, see :mod:`uvms_qp.schemes`), writes ``DIR/<scheme>/results.json`` per
 scheme, ``DIR/comparison.md`` and ``DIR/comparison.json`` (the side-by-side metrics table) and
-PNG figures with the schemes overlaid, and prints the table. A run that breaks the scenario's
-hard bounds is marked ``(exceeded)`` in the table and named in a warning: the closed-form schemes
-ignore the bounds, although each of their steps reports status ``optimal``. An invalid scenario,
-an unknown scheme, a ``--duration`` out of the scenario's limits or an unusable ``--out`` (checked
-before anything runs) exits with status 2 and a one-line message.
+PNG figures with the schemes overlaid, and prints the table within the terminal's width
+(``COLUMNS`` when set, 80 characters in a pipe): the schemes that do not fit follow in a second
+table. A run that breaks the scenario's hard bounds is marked ``(exceeded)`` in the table and
+named in a warning: the closed-form schemes ignore the bounds, although each of their steps
+reports status ``optimal``. An invalid scenario, an unknown scheme, a ``--duration`` out of the
+scenario's limits or an unusable ``--out`` (checked before anything runs) exits with status 2 and
+a one-line message.
 """
 
 from __future__ import annotations
@@ -37,19 +39,41 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     )
 
 
-def _print_table(comparison: Any) -> None:
-    from rich.console import Console
+def _table(comparison: Any, columns: list[int], title: str | None) -> Any:
+    """The metrics of the runs ``columns`` (indices into ``comparison.runs``) as a rich table."""
     from rich.table import Table
 
-    table = Table(title=f"{comparison.scenario}: {comparison.description}")
-    table.add_column("metric", no_wrap=True)
+    table = Table(title=title)
+    table.add_column("metric", overflow="fold")  # on a very narrow console, not the numbers
     table.add_column("unit", no_wrap=True)
-    for run in comparison.runs:
-        table.add_column(run.name, justify="right", no_wrap=True)
+    for i in columns:
+        table.add_column(comparison.runs[i].name, justify="right", no_wrap=True)
     for key, unit, texts in comparison.cells():
-        table.add_row(key, unit, *texts)
-    width = 40 + sum(max(22, len(run.name) + 3) for run in comparison.runs)
-    Console(width=max(100, width)).print(table)
+        table.add_row(key, unit, *(texts[i] for i in columns))
+    return table
+
+
+def print_table(comparison: Any, console: Any) -> None:
+    """Print the metrics table within the console's width.
+
+    The schemes that fit beside the metric and unit columns share a table; the others follow in
+    tables of their own, each repeating the metric and unit columns (a scheme wider than the
+    console on its own still gets a whole table).
+    """
+    unbounded = console.options.update_width(1_000_000)  # the tables' natural widths
+    groups: list[list[int]] = []
+    for i in range(len(comparison.runs)):
+        table = _table(comparison, groups[-1] + [i], None) if groups else None
+        if table is not None and console.measure(table, options=unbounded).maximum \
+                <= console.width:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    title = f"{comparison.scenario}: {comparison.description}"
+    for k, group in enumerate(groups):
+        if k:
+            console.print()
+        console.print(_table(comparison, group, title if k == 0 else None))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -72,7 +96,9 @@ def run(args: argparse.Namespace) -> int:
             if not args.no_plots:
                 plot_comparison(comparison, scenario.model, args.out, progress=not args.quiet)
     if not args.quiet:
-        _print_table(comparison)
+        from rich.console import Console
+
+        print_table(comparison, Console())
         figures = "" if args.no_plots else " and figures"
         print(f"results, comparison.md{figures} in {args.out}")
     for note in comparison.notes():

@@ -3,8 +3,9 @@
 Without a name, a row per model: name, size of ``zeta`` (vehicle + joints), vehicle kind with
 its actuated rates, and what the model is (wrapped to the width of a terminal). The list holds
 the bundled models, the models of the ``--model-path`` files and those that installed packages
-declare (``uvms_qp.models`` entry points). With a name: source, frames, mount, joint limits
-and rate limits.
+declare (``uvms_qp.models`` entry points). With a name: source, frames, mount, joint limits,
+rate limits, the home joint angles and the tool's pose at home (vehicle at the origin): where a
+scenario without ``[initial]`` starts, so where a tool trajectory should start.
 """
 
 from __future__ import annotations
@@ -44,11 +45,19 @@ def _fmt(values: Any) -> str:
     return np.array2string(np.asarray(values), precision=4, separator=", ")
 
 
+def _list(values: Any) -> str:
+    """Values as a list to paste into a scenario file (4 decimals)."""
+    texts = (f"{float(v):.4f}" for v in values)
+    return "[" + ", ".join("0.0000" if t == "-0.0000" else t for t in texts) + "]"
+
+
 def _describe(name: str) -> str:
     from ..model import load_model
+    from ..model.transforms import rotation_to_rpy
 
     model = load_model(name)
     mount = model.mount
+    tool = model.frame_pose(model.home(), "tool")
     lines = [
         model.summary(),
         f"  source:        {model.source}",
@@ -63,6 +72,12 @@ def _describe(name: str) -> str:
     ]
     if model.n_vehicle:
         lines.append(f"  vehicle rate:  {_fmt(model.vehicle_rate_limit)} [m/s, rad/s]")
+    lines += [
+        f"  home joints:   {_list(model.split(model.home())[1])} [rad] (vehicle at the origin: "
+        "where a scenario without [initial] starts)",
+        f"  tool at home:  xyz {_list(tool[:3, 3])} [m], "
+        f"rpy {_list(rotation_to_rpy(tool[:3, :3].ravel().tolist()))} [rad] (world)",
+    ]
     return "\n".join(lines)
 
 

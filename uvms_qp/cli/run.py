@@ -91,7 +91,8 @@ DYNAMIC_KEYS = (
     ("pitch_max", "rad"),
     ("saturation_share_max", ""),
     ("energy", "J"),
-    ("unmet_wrench_max", "N, N m"),
+    ("unmet_force_max", "N"),
+    ("unmet_moment_max", "N m"),
 )
 
 
@@ -147,13 +148,19 @@ def run(args: argparse.Namespace) -> int:
         with writing_output(args.out):
             path = write_results(result, args.out, reference=reference)
             figures = [] if args.no_plots else plot_results(result, args.out,
-                                                            progress=not args.quiet)
+                                                            progress=not args.quiet,
+                                                            reference=reference)
         if args.view:
             try:
                 view = write_view(scenario.model, result, args.view)
             except OSError as exc:
                 raise ConfigError(f"cannot write {args.view!r}: {exc.strerror or exc}",
                                   "--view") from None
+    if result.stopped is not None:
+        stop = result.stopped
+        print(f"error: the run stopped at t = {stop['time']:g} s: {stop['error']}; "
+              f"{path} holds the {result.steps} control steps before it", file=sys.stderr)
+        return 1
     if not args.quiet:
         simulated = result.steps * result.dt
         print(f"{scenario.name}: {result.steps} steps of {result.dt:g} s ({simulated:g} s) in "
@@ -166,11 +173,6 @@ def run(args: argparse.Namespace) -> int:
         print(_summary(result.metrics()))
         if reference is not None:
             print(dynamic_summary(result.metrics(), reference.metrics()))
-    if result.stopped is not None:
-        stop = result.stopped
-        print(f"error: the run stopped at t = {stop['time']:g} s: {stop['error']}; "
-              f"{path} holds the {result.steps} steps before it", file=sys.stderr)
-        return 1
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
     return 0

@@ -75,7 +75,8 @@ def _check_keys(table: Mapping[str, Any], known: tuple[str, ...], path: str, fil
 
 
 def _body(table: Mapping[str, Any], base: BodyParameters | None, path: str,
-          file: str) -> BodyParameters:
+          file: str, missing: str = "missing (required when the file has no `base`)"
+          ) -> BodyParameters:
     _check_keys(table, _BODY_KEYS, path, file)
     values: dict[str, Any] = {}
     for key in _BODY_KEYS:
@@ -83,9 +84,10 @@ def _body(table: Mapping[str, Any], base: BodyParameters | None, path: str,
             values[key] = table[key]
         elif base is not None:
             values[key] = getattr(base, key)
+            if key == "source" and table:  # its numbers are no longer all the base's
+                values[key] = f"{file} over {base.source}" if base.source else file
         elif key != "source":
-            raise ParameterError("missing (required when the file has no `base`)",
-                                 f"{path}.{key}", file=file)
+            raise ParameterError(missing, f"{path}.{key}", file=file)
     if "source" in values and not isinstance(values["source"], str):
         raise ParameterError("expected a string", f"{path}.source", file=file,
                              value=values["source"])
@@ -148,7 +150,11 @@ def load_plant_parameters(path: str | Path) -> PlantParameters:
     links: dict[str, BodyParameters] = dict(base.links) if base is not None else {}
     for joint, table in links_table.items():
         where = f"links.{joint}"
-        links[joint] = _body(_table(table, where, file), links.get(joint), where, file)
+        missing = "missing (required when the file has no `base`)"
+        if base is not None and joint not in base.links:
+            missing = (f"missing: {joint!r} is not a joint of the base set {base.name!r} (its "
+                       f"joints: {', '.join(base.links)}), so its link needs every key")
+        links[joint] = _body(_table(table, where, file), links.get(joint), where, file, missing)
     changes: dict[str, Any] = {"name": data["name"], "vehicle": vehicle, "links": links}
     for key in ("source", "water_density", "gravity", "joint_servo_time_constant"):
         if key in data:

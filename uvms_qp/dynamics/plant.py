@@ -125,6 +125,8 @@ class FloatingPlant:
         nv: Generalized velocity size, ``6 + n_joints`` (every vehicle DOF, passive or not).
         physics_step: Default physics step [s] of :meth:`step`.
         payload: The attached :class:`Payload` or None.
+        joint_torques: The servos' joint torques [N m] (n_joints,) at the start of the latest
+            :meth:`step` (its first stage: the state and inputs it was given), zeros before any.
 
     Raises:
         PlantDataError: the model has no default parameters, or the parameters lack a link for
@@ -165,6 +167,7 @@ class FloatingPlant:
         bounds = as_vector(speed_bounds, "speed_bounds", 3, positive=True)
         self.speed_bounds = tuple(float(b) for b in bounds)
         self.payload: Payload | None = None
+        self.joint_torques = np.zeros(model.n_joints)
 
         self._pm = pin.Model(model.pin_model)
         self._bm = pin.Model(model.pin_model)  # buoyancy: mass rho V at each centre of buoyancy
@@ -415,7 +418,7 @@ class FloatingPlant:
         h = self.physics_step if dt is None else as_scalar(dt, "dt", positive=True)
         pm = self._pm
         f = self._accelerations
-        a1, _ = f(q, v, wrench, reference, t)
+        a1, self.joint_torques = f(q, v, wrench, reference, t)
         x2 = v * (0.5 * h)
         q2 = pin.integrate(pm, q, x2)
         v2 = v + a1 * (0.5 * h)

@@ -180,7 +180,8 @@ class VelocityLoop:
                  restoring: Restoring | None = None, layout: Any = None,
                  bandwidth: Any = DEFAULT_BANDWIDTH,
                  damping_ratio: Any = DEFAULT_DAMPING_RATIO,
-                 damping_feedforward: bool = True) -> VelocityLoop:
+                 damping_feedforward: bool = True, kp: Any = None,
+                 ki: Any = None) -> VelocityLoop:
         """A loop with gains placed on a vehicle's body parameters (the defaults' recipe).
 
         Args:
@@ -198,12 +199,22 @@ class VelocityLoop:
             bandwidth: Closed-loop natural frequency [rad/s] (one or (6,)).
             damping_ratio: Closed-loop damping ratio (one or (6,)).
             damping_feedforward: Feed the damping at ``nu_ref`` forward.
+            kp: Proportional gains (6,) to use instead of the placed ones (None: placed).
+            ki: Integral gains (6,) to use instead of the placed ones (None: placed). With both
+                given, no gain is placed (a vehicle the recipe does not suit still gets a loop).
+
+        Raises:
+            InputError: the placement fails for a DOF (its own damping faster than the
+                bandwidth: give ``kp`` and ``ki``), or a bad argument (named).
         """
-        rotational = _diagonal(inertia, "inertia", 3)
-        rigid = np.array([*([as_scalar(mass, "mass", positive=True)] * 3), *rotational])
-        total = rigid + np.abs(_diagonal(added_mass, "added_mass"))
-        kp, ki = pole_placement_gains(total, linear_damping, bandwidth=bandwidth,
-                                      damping_ratio=damping_ratio)
+        if kp is None or ki is None:
+            rotational = _diagonal(inertia, "inertia", 3)
+            rigid = np.array([*([as_scalar(mass, "mass", positive=True)] * 3), *rotational])
+            total = rigid + np.abs(_diagonal(added_mass, "added_mass"))
+            placed = pole_placement_gains(total, linear_damping, bandwidth=bandwidth,
+                                          damping_ratio=damping_ratio)
+            kp = placed[0] if kp is None else kp
+            ki = placed[1] if ki is None else ki
         limit = None
         if layout is not None:
             limit = np.maximum(-np.asarray(layout.wrench_lower), np.asarray(layout.wrench_upper))

@@ -1,6 +1,6 @@
 """The lexicographic (hierarchical) least-squares solver on plain matrices.
 
-Levels ``L_1 > ... > L_p`` of rows ``lo_k <= A_k x <= hi_k`` are solved in priority order, each
+Levels ``L_0 > ... > L_(p-1)`` of rows ``lo_k <= A_k x <= hi_k`` are solved in priority order, each
 level minimising its weighted violation ``sum_i w_i s_i^2`` subject to the hard box and rows and to
 every higher level keeping the violation it reached; a final regularisation picks the minimum of
 ``x' W x`` (``W`` diagonal). With equality levels only, full-rank levels and no active bound the

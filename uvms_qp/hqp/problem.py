@@ -1,14 +1,14 @@
 """The lexicographic problem in its one stacked layout.
 
 A problem over ``x`` in R^n has a hard box ``lower <= x <= upper``, ``m_H`` hard rows
-``lo_H <= A_H x <= hi_H`` (never relaxed) and levels ``L_1 > ... > L_p`` of rows
+``lo_H <= A_H x <= hi_H`` (never relaxed) and levels ``L_0 > ... > L_(p-1)`` of rows
 ``lo_k <= A_k x <= hi_k`` with positive row weights ``w_k``, and a positive diagonal metric ``W``
 for the final regularisation ``min x' W x``. Every part of the library holds it the same way:
 
-    A  = [ I_n ; A_H ; A_1 ; ... ; A_p ]          (M, n),  M = n + m_H + sum m_k
-    lo = [ lower ; lo_H ; lo_1 ; ... ; lo_p ]      (M,)     -inf allowed
-    hi = [ upper ; hi_H ; hi_1 ; ... ; hi_p ]      (M,)     +inf allowed
-    w  = [ w_1 ; ... ; w_p ]                       (sum m_k,)
+    A  = [ I_n ; A_H ; A_0 ; ... ; A_p-1 ]        (M, n),  M = n + m_H + sum m_k
+    lo = [ lower ; lo_H ; lo_0 ; ... ; lo_p-1 ]    (M,)     -inf allowed
+    hi = [ upper ; hi_H ; hi_0 ; ... ; hi_p-1 ]    (M,)     +inf allowed
+    w  = [ w_0 ; ... ; w_p-1 ]                     (sum m_k,)
 
 so that one product ``A x`` measures every bound, hard row and level row at once
 (:mod:`uvms_qp.hqp.measure`). ``lo`` and ``hi`` are the two rows of one ``(2, M)`` array
@@ -48,7 +48,7 @@ def scale_of(sides: FloatArray) -> float:
 
 
 class Problem:
-    """Buffers of one problem structure ``(n, m_H, (m_1, ..., m_p))`` (see the module docstring).
+    """Buffers of one problem structure ``(n, m_H, (m_0, ..., m_p-1))`` (see the module docstring).
 
     Args:
         n: Number of variables.

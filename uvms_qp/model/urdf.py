@@ -18,6 +18,7 @@ joints and :data:`MAX_LINKS` links (Pinocchio's buffers grow with the cube of th
 from __future__ import annotations
 
 import math
+import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from os import PathLike
@@ -226,7 +227,11 @@ def load_urdf_arm(path: str | Path) -> UrdfArm:
     """
     path = check_path(path)
     if not path.is_file():
-        raise ModelFileError(f"URDF {str(path)!r}: no such file")
+        where = ""
+        if not path.is_absolute():
+            where = (f" ({os.path.abspath(path)}, relative to the working directory "
+                     f"{os.getcwd()})")
+        raise ModelFileError(f"URDF {str(path)!r}: no such file{where}")
     root, leaves, links = _check_xml(path)
     try:
         model = pin.buildModelFromUrdf(str(path))

@@ -88,6 +88,47 @@ def min_span(ax: Any, values: Any, span: float) -> None:
         ax.set_ylim(centre - 0.5 * span, centre + 0.5 * span)
 
 
+#: Legend text of the command-rate window (rates figures).
+RATE_WINDOW_LABEL = "command-rate window"
+#: Legend text of the payload's pick-up on a dynamic plant.
+PAYLOAD_LABEL = "payload attached"
+
+
+def event_label(event: dict[str, Any]) -> str:
+    """Legend text of an event line: ``event TIME s: TASK KEY = VALUE`` (a run's ``events``)."""
+    changes = ", ".join(f"{key} = {_short(value)}" for key, value in event["update"].items())
+    return f"event {event['time']:g} s: {event['task']} {changes}".rstrip()
+
+
+def _short(value: Any) -> str:
+    text = f"{value:g}" if isinstance(value, float | int) else str(value)
+    return text if len(text) <= 24 else text[:23] + "\u2026"
+
+
+def mark_events(ax: Any, events: Iterable[dict[str, Any]],
+                payload_time: float | None = None) -> None:
+    """Dotted vertical lines, labelled for the legend: each event, and the payload's pick-up."""
+    for event in events:
+        ax.axvline(event["time"], color="0.6", linestyle=":", linewidth=1.0,
+                   label=event_label(event))
+    if payload_time is not None:
+        ax.axvline(payload_time, color="tab:brown", linestyle=":", linewidth=1.0,
+                   label=PAYLOAD_LABEL)
+
+
+def legend(ax: Any, sources: Iterable[Any] | None = None, **kwargs: Any) -> None:
+    """A legend on ``ax``: the labelled artists of ``sources`` (default ``ax``), each label once.
+
+    Nothing is drawn when no artist is labelled.
+    """
+    entries: dict[str, Any] = {}
+    for source in sources if sources is not None else (ax,):
+        for handle, label in zip(*source.get_legend_handles_labels(), strict=True):
+            entries.setdefault(label, handle)
+    if entries:
+        ax.legend(list(entries.values()), list(entries), **kwargs)
+
+
 class FigureProgress:
     """Report figures as they are written, once writing has taken :data:`PROGRESS_AFTER` [s].
 

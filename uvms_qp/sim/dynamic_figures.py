@@ -6,9 +6,12 @@
   panel per actuated DOF, sampled at every servo tick;
 - ``attitude_disturbance.png``: roll and pitch of the vehicle, and the unmet part of the demanded
   wrench (what the thrusters could not give);
-- ``joint_torques.png``: the torque each joint servo produced.
+- ``joint_torques.png``: the torque each joint servo produced;
+- ``against_kinematic.png`` (given the kinematic run of the same scenario): the tool's error, the
+  vehicle's position and its pitch on both plants.
 
-Dotted vertical lines mark the scenario's events and the payload's pick-up.
+Dotted vertical lines mark the scenario's events and the payload's pick-up, each named in the
+figure's legend.
 """
 
 from __future__ import annotations
@@ -18,7 +21,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._figures import Builder, pyplot, time_axis
+from ._figures import Builder, legend, mark_events, pyplot, time_axis
+from .metrics import ee_errors
 
 if TYPE_CHECKING:  # pragma: no cover
     from .dynamic_plant import DynamicSeries
@@ -29,12 +33,7 @@ _UNITS = {"u": "m/s", "v": "m/s", "w": "m/s", "p": "rad/s", "q": "rad/s", "r": "
 
 
 def _marks(ax: Any, result: SimulationResult) -> None:
-    for event in result.events:
-        ax.axvline(event["time"], color="0.6", linestyle=":", linewidth=1.0)
-    series: DynamicSeries = result.dynamics
-    if series.payload_time is not None:
-        ax.axvline(series.payload_time, color="tab:brown", linestyle=":", linewidth=1.0,
-                   label="payload taken")
+    mark_events(ax, result.events, result.dynamics.payload_time)
 
 
 def _thrusters(result: SimulationResult) -> Any:
@@ -49,12 +48,12 @@ def _thrusters(result: SimulationResult) -> Any:
     axes[0].axhline(float(series.thrust_lower.max()), color="0.4", linestyle="--",
                     linewidth=0.8, label="reverse limit")
     axes[0].set_ylabel("thrust [N]")
-    axes[0].legend(loc="upper right", fontsize="x-small", ncol=5)
-    axes[1].plot(series.time, series.power, color="tab:red")
+    axes[1].plot(series.time, series.power, color="k", label="all thrusters")
     axes[1].set_ylabel("power [W]")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
+        legend(ax, loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
     fig.suptitle(f"{result.scenario}: thruster forces and electrical power "
                  f"({series.energy[-1]:.0f} J in all)" if series.energy.size else
                  f"{result.scenario}: thruster forces")
@@ -76,7 +75,7 @@ def _velocity_tracking(result: SimulationResult) -> Any:
                 label="vehicle")
         ax.set_ylabel(f"{name} [{_UNITS[name]}]")
         _marks(ax, result)
-    axes[0, 0].legend(loc="upper right", fontsize="small")
+    legend(axes[0, 0], loc="upper right", fontsize="small")
     time_axis(axes[-1, 0])
     fig.suptitle(f"{result.scenario}: vehicle body velocity against the controller's reference")
     return fig
@@ -87,18 +86,17 @@ def _attitude(result: SimulationResult) -> Any:
     plt = pyplot()
     fig, axes = plt.subplots(2, 1, figsize=(9, 5), sharex=True)
     t = result.time_states
-    axes[0].plot(t, np.degrees(result.eta[:, 3]), label="roll phi")
-    axes[0].plot(t, np.degrees(result.eta[:, 4]), label="pitch theta")
-    axes[0].set_ylabel("attitude [deg]")
-    axes[0].legend(loc="best", fontsize="small")
+    axes[0].plot(t, result.eta[:, 3], label="roll phi")
+    axes[0].plot(t, result.eta[:, 4], label="pitch theta")
+    axes[0].set_ylabel("attitude [rad]")
     unmet = np.abs(series.wrench_unmet)
     axes[1].plot(series.time, np.linalg.norm(unmet[:, :3], axis=1), label="force [N]")
     axes[1].plot(series.time, np.linalg.norm(unmet[:, 3:], axis=1), label="moment [N m]")
     axes[1].set_ylabel("unmet wrench")
-    axes[1].legend(loc="best", fontsize="small")
     time_axis(axes[1])
     for ax in axes:
         _marks(ax, result)
+        legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: roll and pitch disturbance, wrench the thrusters lacked")
     return fig
 
@@ -110,18 +108,48 @@ def _joint_torques(result: SimulationResult) -> Any:
     for i, name in enumerate(result.joint_names):
         ax.plot(series.time, series.joint_torque[:, i], label=name, linewidth=1.0)
     ax.set_ylabel("joint torque [N m]")
-    ax.legend(loc="best", fontsize="small")
     time_axis(ax)
     _marks(ax, result)
+    legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: torques of the arm's joint servos")
     return fig
 
 
-def dynamic_builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
-    """The dynamic run's figures as ``(file name, builder)`` (none for a kinematic run)."""
+def _against_kinematic(result: SimulationResult, reference: SimulationResult) -> Any:
+    plt = pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
+    runs = (("kinematic", reference, "0.5", "--"), ("dynamic", result, "tab:blue", "-"))
+    for label, run, colour, style in runs:
+        axes[0].semilogy(run.time_states, np.maximum(ee_errors(run), 1e-9), color=colour,
+                         linestyle=style, label=label)
+        for i, axis in enumerate("xyz"):
+            axes[1].plot(run.time_states, run.vehicle_position[:, i], color=colour,
+                         linestyle=style, alpha=(0.5 + 0.25 * i), label=f"{axis} ({label})")
+        axes[2].plot(run.time_states, run.eta[:, 4], color=colour, linestyle=style,
+                     label=f"pitch ({label})")
+    axes[0].set_ylabel("tool error [m]")
+    axes[1].set_ylabel("vehicle position [m]")
+    axes[2].set_ylabel("pitch [rad]")
+    time_axis(axes[2])
+    for ax in axes:
+        _marks(ax, result)
+        legend(ax, loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small")
+    fig.suptitle(f"{result.scenario}: the floating vehicle against the kinematic run")
+    return fig
+
+
+def dynamic_builders(result: SimulationResult, reference: SimulationResult | None = None
+                     ) -> Iterator[tuple[str, Builder]]:
+    """The dynamic run's figures as ``(file name, builder)`` (none for a kinematic run).
+
+    ``reference``: the kinematic run of the same scenario, drawn beside the dynamic one in
+    ``against_kinematic.png`` (tool error, vehicle position, pitch).
+    """
     series = result.dynamics
     if series is None or not series.time.size:
         return
+    if reference is not None and result.eta.shape[1] == 6:
+        yield "against_kinematic.png", lambda: _against_kinematic(result, reference)
     yield "thrusters.png", lambda: _thrusters(result)
     yield "velocity_tracking.png", lambda: _velocity_tracking(result)
     if result.eta.shape[1] == 6:

@@ -15,8 +15,8 @@ per servo tick, and the run's states), next to the kinematic metrics of
   ``saturation_share_max``;
 - ``energy`` [J]: the thrusters' electrical energy over the run; ``power_mean`` [W];
 - ``joint_torque_max`` (by joint) [N m]: the largest torque a joint's servo produced;
-- ``unmet_wrench_max`` [N, N m]: the largest part of a demanded wrench the thrusters could not
-  give (0 when the allocation always met the demand).
+- ``unmet_force_max`` [N] and ``unmet_moment_max`` [N m]: the largest force and moment (norms)
+  of a demanded wrench the thrusters could not give (0 when the allocation always met it).
 
 A scenario phase gets ``roll_max``, ``pitch_max``, ``pitch_rms`` and, on a dynamic plant,
 ``energy`` (drawn within the window), ``power_mean`` and ``saturation_share_max`` of its window
@@ -80,8 +80,9 @@ def dynamic_metrics(result: SimulationResult) -> dict[str, Any]:
         out["power_mean"] = float(series.energy[-1] / duration) if duration > 0 else 0.0
         torque = np.max(np.abs(series.joint_torque), axis=0)
         out["joint_torque_max"] = dict(zip(result.joint_names, _rounded(torque), strict=True))
-        unmet = np.max(np.abs(series.wrench_unmet))
-        out["unmet_wrench_max"] = float(unmet)
+        unmet = np.abs(series.wrench_unmet)
+        out["unmet_force_max"] = float(np.linalg.norm(unmet[:, :3], axis=1).max())
+        out["unmet_moment_max"] = float(np.linalg.norm(unmet[:, 3:], axis=1).max())
     return out
 
 

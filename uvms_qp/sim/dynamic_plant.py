@@ -32,6 +32,7 @@ from .._validation import FloatArray
 from ..dynamics import (
     DEFAULT_STEP,
     FloatingPlant,
+    SinusoidalCurrent,
     ThrustAllocator,
     ThrusterDynamics,
     ThrusterLayout,
@@ -75,6 +76,40 @@ def thruster_layout(parameters: Any, voltage: float | None) -> ThrusterLayout:
     return ThrusterLayout.bluerov2_heavy(voltage)
 
 
+def water(current: Any) -> Any:
+    """The water's world velocity for the plant: None, a constant vector or a slow oscillation.
+
+    ``current`` is the scenario's :class:`~uvms_qp.sim.current.ConstantCurrent` (or None); with
+    an ``oscillation`` amplitude [m/s] and ``period`` [s] its speed varies as
+    ``speed + oscillation sin(2 pi t / period)`` along its direction.
+    """
+    if current is None:
+        return None
+    velocity = current.velocity()
+    if not current.oscillation:
+        return velocity
+    return SinusoidalCurrent(velocity, current.oscillation * current.unit(), current.period)
+
+
+def _velocity_loop(params: Any, spec: PlantSpec, layout: ThrusterLayout,
+                   actuated: tuple[str, ...], period: float, restoring: Any) -> VelocityLoop:
+    """The vehicle's velocity loop: the ``[plant.gains]`` given, the others by pole placement.
+
+    Raises:
+        InputError: the placement fails for the vehicle and ``[plant.gains]`` does not give
+            both gains (the message says to).
+    """
+    body = params.vehicle
+    try:
+        return VelocityLoop.for_body(
+            body.mass, body.inertia, body.added_mass, body.linear_damping,
+            quadratic_damping=body.quadratic_damping, dt=period, actuated=actuated,
+            restoring=restoring, layout=layout, kp=spec.proportional, ki=spec.integral)
+    except InputError as exc:
+        raise InputError(f"velocity loop of {params.name!r}: {exc}; or give its gains in "
+                         "[plant.gains] (proportional and integral, 6 each)") from None
+
+
 @dataclass
 class DynamicSeries:
     """What a dynamic plant recorded, at every servo tick (M ticks).
@@ -95,7 +130,8 @@ class DynamicSeries:
         velocity_reference: The reference of each tick (M, 6) (NaN on passive DOFs).
         joint_rates: True joint rates at the start of each tick (M, n_joints) [rad/s].
         joint_reference: Joint rate references of each tick (M, n_joints) [rad/s].
-        joint_torque: Joint torques the servos produced at the end of each tick
+        joint_torque: Joint torques the servos produced at the start of each tick (its first
+            physics step's, :attr:`~uvms_qp.dynamics.FloatingPlant.joint_torques`)
             (M, n_joints) [N m].
         actuated: Actuated body DOFs (names in ``nu`` order).
         payload_time: When the payload was attached [s], or None.
@@ -142,9 +178,8 @@ class DynamicPlant:
         if spec.parameters is None:
             raise InputError("plant: a dynamic plant needs a parameter set")
         params = spec.parameters
-        velocity = None if current is None else current.velocity()
         physics = spec.physics_step or DEFAULT_STEP
-        self.physics = FloatingPlant(model, params, current=velocity, step=physics)
+        self.physics = FloatingPlant(model, params, current=water(current), step=physics)
         self.model = model
         self.spec = spec
         self.dt = dt
@@ -157,18 +192,21 @@ class DynamicPlant:
                                     f"the physics step {physics:g} s")
         self.physics_step = self.servo_period / self.physics_steps
         layout = thruster_layout(params, spec.supply_voltage)
+        passive = [d for d in model.actuated if d not in layout.actuated]
+        if passive:
+            raise PlantDataError(
+                f"thruster layout {layout.name or '(unnamed)'!r} leaves {', '.join(passive)} "
+                f"passive, which model {model.name!r} commands: the controller would ask for "
+                "rates no thruster gives; actuate them in the layout, or build the model with "
+                "those DOFs passive (Vehicle(actuated=...))")
         self.layout = layout
         self.allocator = ThrustAllocator(layout)
         self.thrusters = ThrusterDynamics(layout)
-        body = params.vehicle
-        self.loop = VelocityLoop.for_body(
-            body.mass, body.inertia, body.added_mass, body.linear_damping,
-            quadratic_damping=body.quadratic_damping, dt=self.servo_period,
-            actuated=model.actuated, restoring=self.physics.restoring_wrench, layout=layout)
-        if spec.proportional is not None or spec.integral is not None:
-            kp = self.loop.kp if spec.proportional is None else spec.proportional
-            ki = self.loop.ki if spec.integral is None else spec.integral
-            self.loop.set_gains(kp, ki)
+        self.feedforward = {"model": self.physics.restoring_wrench, "none": None,
+                            "nominal": FloatingPlant(model, params).restoring_wrench,
+                            }[spec.feedforward]
+        self.loop = _velocity_loop(params, spec, layout, model.actuated, self.servo_period,
+                                   self.feedforward)
         self.sensors = sensors
         self._actuated = [NU_NAMES.index(d) for d in model.actuated]
         self._n_vehicle = int(model.n_vehicle)
@@ -182,12 +220,18 @@ class DynamicPlant:
     # --- the run ------------------------------------------------------------------------------
 
     def start(self, q0: FloatArray) -> None:
-        """Begin at rest at ``q0``: zero velocity, thrust, integral and energy; no payload."""
+        """Begin at rest at ``q0``, trimmed (the thrusters hold it), with no payload.
+
+        Zero velocity, integral and energy; the thrusters' forces are the allocation of the
+        loop's feed-forward at ``q0`` (the wrench that holds the vehicle there).
+        """
         self._q = np.array(q0, dtype=np.float64)
         self._v[:] = 0.0
         self.loop.reset()
-        self.thrusters.reset()
         self.physics.detach_payload()
+        # trimmed: the thrusters already hold the vehicle against its weight and buoyancy
+        hold = self.feedforward(self._q) if self.feedforward is not None else np.zeros(6)
+        self.thrusters.reset(self.allocator.allocate(hold).forces)
         self._payload_attached = None
         self._unmet[:] = 0.0
         self._records = {key: [] for key in (
@@ -244,10 +288,12 @@ class DynamicPlant:
             records["body_velocity"].append(nu.copy())
             records["joint_rates"].append(v[6:].copy())
             time = tick
-            for _ in range(self.physics_steps):
+            for i in range(self.physics_steps):
                 thrusters.step(h)
                 q, v = physics.step(q, v, thrusters.wrench(), joint_ref, time, h)
                 time += h
+                if i == 0:
+                    records["joint_torque"].append(physics.joint_torques)
             records["thrust"].append(thrusters.forces)
             records["thrust_command"].append(allocation.forces)
             records["saturated"].append(allocation.saturated)
@@ -257,8 +303,6 @@ class DynamicPlant:
             records["wrench_unmet"].append(allocation.unmet)
             records["velocity_reference"].append(nu_ref)
             records["joint_reference"].append(joint_ref)
-            records["joint_torque"].append(
-                physics.accelerations(q, v, thrusters.wrench(), joint_ref, time)[1])
         self._q, self._v = q, v
         return q
 

@@ -24,6 +24,7 @@ validates it once and registers it, so scenarios name it like a bundled model
 from __future__ import annotations
 
 import copy
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -134,7 +135,10 @@ def model_from_table(table: Table, base: Path) -> Model:
         if not path.is_absolute():
             path = base / path
         if not path.is_file():
-            raise ConfigError(f"URDF file not found: {path}", table.at("urdf"))
+            where = "" if Path(urdf).is_absolute() else (
+                f" ({urdf!r} taken relative to {os.path.abspath(base)})")
+            raise ConfigError(f"URDF file not found: {os.path.abspath(path)}{where}",
+                              table.at("urdf"))
         return _build(Model.from_urdf, table, {"path": path, **kwargs},
                       {"urdf": urdf, **kwargs})
     if table.has("tool_offset"):

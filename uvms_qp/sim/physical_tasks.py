@@ -1,4 +1,4 @@
-"""The mission's physical tasks measured on the floating vehicle (``docs/dynamics.md``).
+"""The mission's physical tasks measured on the floating vehicle (docs/dynamics.md).
 
 Station keeping, current alignment and the payload moment exist for physical reasons, and
 arm-vehicle coordination for a physical lag: their benefit shows only on a plant that does not
@@ -179,6 +179,8 @@ def markdown(records: list[dict[str, Any]]) -> str:
             unit = f" [{m['unit']}]" if m["unit"] else ""
             lines.append(f"| {record['name']} | {record['phase']} | {m['label']}{unit} | "
                          f"{_cell(on)} | {_cell(off)} | {ratio} |")
+    if any(m["on"] is None or m["off"] is None for r in records for m in r["metrics"]):
+        lines.append("\n-: the run did not reach that window (a shorter --duration).")
     return "\n".join(lines)
 
 

@@ -4,10 +4,11 @@
 
     [plant]
     type = "dynamic"                 # or "kinematic" (the default: the command realised exactly)
-    parameters = "bluerov2_heavy"    # a bundled parameter set, or file = "my_rov.toml"
+    parameters = "bluerov2_heavy_von_benzon_2022"   # a bundled set, or file = "my_rov.toml"
     physics_step = 0.002             # [s] fixed step of the equations of motion
     servo_rate = 100.0               # [Hz] velocity loop, allocation and joint servos
     coordination = true              # arm levels re-solved with the measured vehicle velocity
+    feedforward = "model"            # the loop's restoring wrench: "model", "nominal" or "none"
     supply_voltage = 16.0            # [V] T200 force limits (12, 16 or 20; default: the set's)
 
     [plant.payload]                  # taken by the tool at a time (a scenario's pick-up)
@@ -31,7 +32,8 @@ import numpy as np
 
 from .. import dynamics
 from .._validation import FloatArray, as_scalar, as_vector
-from ..errors import ConfigError, InputError, UvmsQpError
+from ..dynamics.thrusters import T200_RATINGS
+from ..errors import ConfigError, InputError, ModelError, PlantDataError, UvmsQpError
 from .config import Table
 from .sensors import Sensors
 
@@ -39,7 +41,11 @@ from .sensors import Sensors
 PLANT_KINDS = ("kinematic", "dynamic")
 #: Keys of ``[plant]``.
 PLANT_KEYS = ("type", "parameters", "file", "physics_step", "servo_rate", "coordination",
-              "supply_voltage", "payload", "gains")
+              "supply_voltage", "payload", "gains", "feedforward")
+#: What the vehicle's velocity loop feeds forward (:class:`PlantSpec`).
+FEEDFORWARDS = ("model", "nominal", "none")
+#: Shortest physics step [s]: below it a run of seconds takes hours.
+MIN_PHYSICS_STEP = 1e-4
 #: Keys of ``[plant.payload]``.
 PAYLOAD_KEYS = ("time", "mass", "volume", "offset")
 #: Keys of ``[plant.gains]``: the vehicle velocity loop's PI gains per body DOF.
@@ -85,6 +91,10 @@ class PlantSpec:
         payload: A payload taken by the tool during the run, or None.
         proportional: Velocity-loop proportional gains per body DOF (6,), None for the default.
         integral: Velocity-loop integral gains per body DOF (6,), None for the default.
+        feedforward: The restoring wrench the velocity loop feeds forward: ``"model"`` (the
+            plant's own, the payload included once it is taken: a payload the operator declares,
+            as the controller's payload task is told of it), ``"nominal"`` (the vehicle and arm
+            without any payload: a payload the loop must find by its integral) or ``"none"``.
     """
 
     kind: str = "kinematic"
@@ -96,6 +106,29 @@ class PlantSpec:
     payload: Payload | None = None
     proportional: FloatArray | None = field(default=None, repr=False)
     integral: FloatArray | None = field(default=None, repr=False)
+    feedforward: str = "model"
+
+    def __post_init__(self) -> None:
+        if self.kind not in PLANT_KINDS:
+            raise InputError(f"plant: unknown kind {self.kind!r}; known: "
+                             f"{', '.join(PLANT_KINDS)}")
+        if self.feedforward not in FEEDFORWARDS:
+            raise InputError(f"feedforward: expected one of {', '.join(FEEDFORWARDS)}, got "
+                             f"{self.feedforward!r}")
+
+    def settings(self) -> dict[str, Any]:
+        """What a run's record says of the plant (``results.json``: ``plant_settings``)."""
+        params = self.parameters
+        return {
+            "type": self.kind,
+            "parameters": None if params is None else params.name,
+            "parameters_source": None if params is None else params.source,
+            "physics_step": self.physics_step, "servo_rate": self.servo_rate,
+            "coordination": self.coordination, "supply_voltage": self.supply_voltage,
+            "feedforward": self.feedforward,
+            "payload": None if self.payload is None else dataclasses.asdict(self.payload),
+            "gains": {"proportional": self.proportional, "integral": self.integral},
+        }
 
     def as_kind(self, kind: str, model: Any) -> PlantSpec:
         """This specification with another kind; a dynamic one gets the model's parameters.
@@ -107,17 +140,20 @@ class PlantSpec:
             raise InputError(f"unknown plant {kind!r}; known plants: {', '.join(PLANT_KINDS)}")
         parameters = self.parameters
         if kind == "dynamic" and parameters is None:
-            parameters = dynamics.default_plant_parameters(model)
+            parameters = default_parameters(model)
         return dataclasses.replace(self, kind=kind, parameters=parameters)
 
 
-def read_plant(table: Table | None, model: Any, base: Path) -> PlantSpec:
+def read_plant(table: Table | None, model: Any, base: Path, dt: float,
+               duration: float) -> PlantSpec:
     """Read ``[plant]`` (None: a kinematic plant with the default dynamic settings).
 
     Args:
         table: The ``[plant]`` table, or None.
         model: The scenario's model (its default parameter set, its joints).
         base: Folder a relative ``file`` is resolved against.
+        dt: The control period [s] (the servo period must divide it).
+        duration: The simulated time [s] (a payload is taken within it).
 
     Raises:
         ConfigError: any invalid field, with its path.
@@ -137,16 +173,28 @@ def read_plant(table: Table | None, model: Any, base: Path) -> PlantSpec:
             parameters = dynamics.load_plant_parameters(path)
         elif name is not None:
             parameters = dynamics.plant_parameters(name)
-        else:
-            parameters = dynamics.default_plant_parameters(model) if kind == "dynamic" else None
+        elif kind == "dynamic":
+            parameters = default_parameters(model)
     except UvmsQpError as exc:
         key = "file" if file is not None else "parameters" if name is not None else "type"
         raise ConfigError(str(exc), table.at(key)) from exc
-    step = table.take_number("physics_step", None, positive=True)
     rate = float(table.take_number("servo_rate", 100.0, positive=True) or 100.0)
+    if not _divides(1.0 / rate, dt):
+        raise ConfigError(f"the servo period 1/{rate:g} s must divide the control period "
+                          f"{dt:g} s (e.g. {1.0 / dt:g} Hz times a whole number)",
+                          table.at("servo_rate"))
+    step = table.take_number("physics_step", None, minimum=MIN_PHYSICS_STEP)
+    if step is not None and not _divides(step, 1.0 / rate):
+        raise ConfigError(f"the physics step {step:g} s must divide the servo period "
+                          f"{1.0 / rate:g} s", table.at("physics_step"))
     coordination = table.take_bool("coordination", False)
     voltage = table.take_number("supply_voltage", None, positive=True)
-    payload = _read_payload(table.take_table("payload", keys=PAYLOAD_KEYS))
+    if voltage is not None and voltage not in T200_RATINGS:
+        known = ", ".join(f"{v:g}" for v in T200_RATINGS)
+        raise ConfigError(f"no published T200 figures at {voltage:g} V (known: {known} V)",
+                          table.at("supply_voltage"))
+    feedforward = table.take_str("feedforward", "model", choices=FEEDFORWARDS) or "model"
+    payload = _read_payload(table.take_table("payload", keys=PAYLOAD_KEYS), duration)
     gains = table.take_table("gains", keys=GAIN_KEYS)
     proportional = integral = None
     if gains is not None:
@@ -155,13 +203,37 @@ def read_plant(table: Table | None, model: Any, base: Path) -> PlantSpec:
         gains.finish()
     table.finish()
     return PlantSpec(kind, parameters, step, rate, coordination, voltage, payload,
-                     proportional, integral)
+                     proportional, integral, feedforward)
 
 
-def _read_payload(table: Table | None) -> Payload | None:
+def _divides(part: float, whole: float) -> bool:
+    """Whether ``whole / part`` is a whole number >= 1 (to a relative 1e-9)."""
+    ratio = whole / part
+    return round(ratio) >= 1 and abs(ratio - round(ratio)) <= 1e-9 * max(1.0, ratio)
+
+
+def default_parameters(model: Any) -> Any:
+    """The model's default plant parameters.
+
+    Raises:
+        ModelError: the vehicle is not spatial (no parameter file can help: the dynamic plant
+            needs a free-floating vehicle). PlantDataError: no bundled set for the model (the
+            message says how to give one: ``[plant] file = ...``).
+    """
+    if model.vehicle_kind != "spatial":
+        raise ModelError(f"model {model.name!r} has a {model.vehicle_kind} vehicle: the dynamic "
+                         "plant needs a spatial (free-floating) one")
+    try:
+        return dynamics.default_plant_parameters(model)
+    except PlantDataError as exc:
+        raise PlantDataError(f"{exc}; in a scenario file: [plant] file = \"my_plant.toml\"") \
+            from None
+
+
+def _read_payload(table: Table | None, duration: float) -> Payload | None:
     if table is None:
         return None
-    time = table.take_number("time", required=True, nonnegative=True)
+    time = table.take_number("time", required=True, nonnegative=True, maximum=duration)
     mass = table.take_number("mass", required=True, positive=True)
     volume = table.take_number("volume", 0.0, nonnegative=True)
     offset = table.take_numbers("offset", [0.0, 0.0, 0.0], size=3)

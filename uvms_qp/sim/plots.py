@@ -9,14 +9,15 @@ One file per topic, each drawn only when the run has something to show:
 - ``manipulability.png``: the measure in its unit, with the manipulability task's floor;
 - ``rates.png``: the command, every entry of zeta in its unit, with its hard box shaded (the
   intersection of every constraint's bounds at each step) and, with command-rate bounds, the
-  window ``zeta_(k-1) +/- a_max dt`` they allowed at each step (green dotted);
+  window ``zeta_(k-1) +/- a_max dt`` they allowed at each step (green dotted, in the legend);
 - ``residuals.png``: per-level residual norms (log scale), levels numbered from 0 as in
   the ``summary()`` of a solve and of a control step;
 - ``payload_moment.png``: with a payload task;
 - on a dynamic plant, the figures of :mod:`uvms_qp.sim.dynamic_figures` (thrusters, velocity
   tracking, attitude disturbance, joint torques).
 
-Dotted vertical lines mark the scenario's events. :func:`run_figures` gives the figures as
+Dotted vertical lines mark the scenario's events (the payload's pick-up of the demo is one), each
+named in the figure's legend. :func:`run_figures` gives the figures as
 matplotlib objects (to inspect or restyle); :func:`plot_results` writes them.
 """
 
@@ -29,8 +30,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._figures import (
+    RATE_WINDOW_LABEL,
     Builder,
     built,
+    legend,
+    mark_events,
     min_span,
     output_dir,
     pyplot,
@@ -54,8 +58,7 @@ LOG_FLOOR = 1e-12
 
 
 def _events(ax: Any, result: SimulationResult) -> None:
-    for event in result.events:
-        ax.axvline(event["time"], color="0.6", linestyle=":", linewidth=1.0)
+    mark_events(ax, result.events)
 
 
 def is_planar(result: SimulationResult) -> bool:
@@ -92,7 +95,7 @@ def _tool_tracking(result: SimulationResult) -> Any:
         axes[i].set_ylabel(f"{label} [m]")
         min_span(axes[i], result.ee_position[:, i], POSITION_SPAN)
         _events(axes[i], result)
-    axes[0].legend(loc="best")
+    legend(axes[0], loc="best", fontsize="small")
     if has_target:
         error = np.linalg.norm(result.ee_position - result.target_position, axis=1)
         axes[-1].semilogy(t, np.maximum(error, LOG_FLOOR))
@@ -112,7 +115,6 @@ def _vehicle_pose(result: SimulationResult) -> Any:
     for i, label in enumerate(position_names):
         axes[0].plot(t, result.vehicle_position[:, i], label=label)
     axes[0].set_ylabel("position [m]")
-    axes[0].legend(loc="best")
     min_span(axes[0], result.vehicle_position[:, : len(position_names)], POSITION_SPAN)
     angle_names = ("psi",) if size == 3 else ("phi", "theta", "psi")
     angles = result.eta[:, size - len(angle_names):]
@@ -121,11 +123,12 @@ def _vehicle_pose(result: SimulationResult) -> Any:
     if result.heading is not None:
         axes[1].axhline(result.heading, color="k", linestyle="--", label="current heading")
     axes[1].set_ylabel("attitude [rad]")
-    axes[1].legend(loc="best")
     min_span(axes[1], angles, ANGLE_SPAN)
     time_axis(axes[1])
     for ax in axes:
         _events(ax, result)
+    legend(axes[0], [axes[0]], loc="best", fontsize="small")
+    legend(axes[1], [axes[1]], loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: vehicle pose")
     return fig
 
@@ -146,6 +149,7 @@ def _joints(result: SimulationResult) -> Any:
                 limited = True
         ax.set_ylabel(f"{result.joint_names[j]} [{units[j]}]")
         _events(ax, result)
+    legend(axes[0, 0], loc="best", fontsize="small")
     time_axis(axes[-1, 0])
     fig.suptitle(f"{result.scenario}: joints" + (" (dashed: limits)" if limited else ""))
     return fig
@@ -159,11 +163,12 @@ def _manipulability(result: SimulationResult) -> Any:
     floor = result.manipulability_floor
     if floor is not None and np.isfinite(floor).any():
         ax.plot(t, floor, "r--", linewidth=1.0, label="floor")
-        ax.legend(loc="best")
     unit = result.manipulability_unit
     ax.set_ylabel(f"manipulability w [{unit_label(unit)}]" if unit else "manipulability w")
     time_axis(ax)
     _events(ax, result)
+    if len(ax.get_lines()) > 1:  # w alone needs no legend
+        legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: manipulability (Yoshikawa)")
     return fig
 
@@ -181,12 +186,12 @@ def _rates(result: SimulationResult) -> Any:
         ax = axes[i // cols, i % cols]
         lower = result.zeta_lower[:, i]
         upper = result.zeta_upper[:, i]
-        ax.plot(ts, result.zeta[:, i], linewidth=1.0)
+        ax.plot(ts, result.zeta[:, i], linewidth=1.0, label="command")
         shown = [result.zeta[:, i]]
         for bound in (lower, upper):
             if np.isfinite(bound).any():
                 finite = np.where(np.isfinite(bound), bound, np.nan)
-                ax.plot(ts, finite, "r--", linewidth=0.8)
+                ax.plot(ts, finite, "r--", linewidth=0.8, label="hard box")
                 shown.append(finite)
         if np.isfinite(lower).any() or np.isfinite(upper).any():
             ax.fill_between(ts, np.where(np.isfinite(lower), lower, np.nan),
@@ -195,10 +200,12 @@ def _rates(result: SimulationResult) -> Any:
         window = _rate_window(result, i)
         if window is not None:
             for side in window:
-                ax.plot(ts, side, ":", color="tab:green", linewidth=0.9)
+                ax.plot(ts, side, ":", color="tab:green", linewidth=0.9, label=RATE_WINDOW_LABEL)
         ax.set_ylabel(f"{result.zeta_names[i]} [{units[i]}]")
         min_span(ax, np.concatenate(shown), RATE_SPAN)
         _events(ax, result)
+    drawn = [axes[i // cols, i % cols] for i in range(nv)]
+    legend(drawn[0], drawn, loc="best", fontsize="x-small")  # every panel's kinds of line, once
     for i in range(nv, rows * cols):
         axes[i // cols, i % cols].axis("off")
     for col in range(cols):  # the lowest drawn panel of each column carries the time axis
@@ -206,7 +213,7 @@ def _rates(result: SimulationResult) -> Any:
         time_axis(axes[last, col])
     title = f"{result.scenario}: command zeta and its hard box (red dashed, shaded)"
     if result.command_rate_limit is not None:
-        title += "\nand the command-rate window (green dotted)"
+        title += f"\nand the {RATE_WINDOW_LABEL} (green dotted)"
     fig.suptitle(title)
     return fig
 
@@ -238,8 +245,8 @@ def _residuals(result: SimulationResult) -> Any:
             ax.semilogy(result.time, np.maximum(series, LOG_FLOOR), label=label)
     ax.set_ylabel("residual norm (level units)")
     time_axis(ax)
-    ax.legend(loc="best", fontsize="small")
     _events(ax, result)
+    legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: per-level residuals (levels from 0, highest priority)")
     return fig
 
@@ -251,11 +258,13 @@ def _payload_moment(result: SimulationResult) -> Any:
     ax.set_ylabel("payload moment [N m]")
     time_axis(ax)
     _events(ax, result)
+    legend(ax, loc="best", fontsize="small")
     fig.suptitle(f"{result.scenario}: payload moment F |(x_E, y_E)|")
     return fig
 
 
-def _builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
+def _builders(result: SimulationResult, reference: SimulationResult | None = None
+              ) -> Iterator[tuple[str, Builder]]:
     """The run's figures that have something to show, as ``(file name, builder)``."""
     yield "tool_tracking.png", lambda: _tool_tracking(result)
     if result.eta.shape[1]:
@@ -269,7 +278,7 @@ def _builders(result: SimulationResult) -> Iterator[tuple[str, Builder]]:
         yield "residuals.png", lambda: _residuals(result)
     if result.payload_moment is not None:
         yield "payload_moment.png", lambda: _payload_moment(result)
-    yield from dynamic_builders(result)
+    yield from dynamic_builders(result, reference)
 
 
 def run_figures(result: SimulationResult) -> dict[str, Any]:
@@ -278,14 +287,16 @@ def run_figures(result: SimulationResult) -> dict[str, Any]:
 
 
 def plot_results(result: SimulationResult, out_dir: str | Path, *,
-                 progress: bool = False) -> list[Path]:
+                 progress: bool = False, reference: SimulationResult | None = None
+                 ) -> list[Path]:
     """Write the figures of ``result`` into ``out_dir``; return their paths.
 
     Args:
         result: The run.
+        reference: For a dynamic run, the kinematic run of the same scenario (drawn beside it).
         out_dir: Output directory (created if needed). A figure path there that is a symbolic
             link is replaced by the figure, never followed.
         progress: Report the figures as they are written (on standard error).
     """
-    return write_figures(_builders(result), output_dir(out_dir),
+    return write_figures(_builders(result, reference), output_dir(out_dir),
                          label=f"{result.scenario} figures", progress=progress)

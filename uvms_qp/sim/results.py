@@ -1,7 +1,9 @@
 """``results.json``: the record of one run.
 
 Top level: ``scenario``, ``scheme``, ``solver``, ``model``, ``plant`` (``"kinematic"`` or
-``"dynamic"``), ``dt`` [s], ``steps``, ``duration`` [s], ``wall_time_s``, ``metrics`` (see
+``"dynamic"``) with ``plant_settings`` (its parameter set and source, rates, coordination,
+feed-forward, payload, gains) and ``sensors`` (noise and delay, ``null`` when exact), ``dt`` [s],
+``steps``, ``duration`` [s], ``wall_time_s``, ``metrics`` (see
 :mod:`uvms_qp.sim.metrics`; a dynamic run adds :mod:`uvms_qp.sim.dynamic_metrics`), ``phases``
 (metrics per scenario phase), ``events`` (applied run-time changes), ``stopped`` (only when the run
 ended early: ``time`` [s], ``step`` and ``error``), ``kinematic_reference`` (a dynamic run's record
@@ -167,6 +169,8 @@ def results_dict(result: SimulationResult, *, series: bool = True,
         "events": result.events,
         "provenance": provenance(command),
     }
+    data["plant_settings"] = result.plant_settings
+    data["sensors"] = result.sensors
     if result.stopped is not None:
         data["stopped"] = result.stopped
     if reference is not None:

@@ -26,6 +26,7 @@ The result keeps plain numpy arrays; :mod:`uvms_qp.sim.metrics` turns them into 
 
 from __future__ import annotations
 
+import dataclasses
 import time as _time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -121,6 +122,8 @@ class SimulationResult:
             (:class:`~uvms_qp.sim.dynamic_plant.DynamicSeries`), None for a kinematic run.
         stopped: Why the run ended early (``{"time": t [s], "step": k, "error": message}``),
             None when it ran to the end. The series then hold the steps before the failure.
+        plant_settings: The plant's settings (:meth:`~uvms_qp.sim.plant_config.PlantSpec.settings`).
+        sensors: The sensors' noise and delay (field name -> value), None when exact.
     """
 
     scenario: str
@@ -176,6 +179,8 @@ class SimulationResult:
     plant: str = "kinematic"
     dynamics: Any = None
     stopped: dict[str, Any] | None = None
+    plant_settings: dict[str, Any] = field(default_factory=dict)
+    sensors: dict[str, Any] | None = None
 
     def metrics(self) -> dict[str, Any]:
         """The run metrics (:func:`uvms_qp.sim.metrics.compute_metrics`) and the fallback ones.
@@ -470,4 +475,7 @@ def simulate(
         plant=plant.kind,
         dynamics=plant.series(n),
         stopped=stopped,
+        plant_settings=scenario.plant.settings(),
+        sensors=(None if scenario.sensors is None
+                 else dataclasses.asdict(scenario.sensors)),
     )

@@ -61,6 +61,7 @@ from .stack_tables import (
     read_trajectories,
 )
 from .trajectories import Trajectory
+from .trajectory_start import warn_far_starts
 
 #: Most control steps a run may take (``duration / dt``, command-line overrides included).
 MAX_STEPS = 2_000_000
@@ -353,6 +354,10 @@ class Scenario:
             InputError: invalid dt/duration/q0/deadline, an event naming an unknown task
                 (:class:`~uvms_qp.errors.UnknownNameError`) or carrying an update its task
                 rejects, or any error of the stack, schemes or controller.
+
+        Warns:
+            ScenarioWarning: a trajectory starts away from the frame it moves
+                (:mod:`uvms_qp.sim.trajectory_start`).
         """
         dt = _check_dt(as_scalar(dt, "dt", positive=True), "dt")
         duration = as_scalar(duration, "duration", positive=True)
@@ -412,6 +417,7 @@ class Scenario:
             sensors=sensors,
         )
         check.check_period(scenario.dt)  # the events are then checked against the period
+        warn_far_starts(check, model.state(q0))  # before the events change the targets
         scenario._check_objects(check)
         scenario._check_hard_set(scenario.make_controller(stack=check))
         return scenario
@@ -501,6 +507,10 @@ def load_scenario(source: str | Path) -> Scenario:
 
     Raises:
         ConfigError: the file is missing or malformed, or any field is invalid (path in message).
+
+    Warns:
+        ScenarioWarning: a trajectory starts away from the frame it moves
+            (:mod:`uvms_qp.sim.trajectory_start`).
     """
     path = resolve_scenario(source)
     data = read_toml(path)
@@ -572,8 +582,10 @@ def _read_current(table: Table | None) -> ConstantCurrent | None:
     direction = table.take_number("direction", required=True)
     speed = table.take_number("speed", 0.0, nonnegative=True)
     drift = table.take_number("drift", 0.0, minimum=0.0, maximum=1.0)
+    oscillation = table.take_number("oscillation", 0.0, nonnegative=True)
+    period = table.take_number("period", 60.0, positive=True)
     table.finish()
-    return ConstantCurrent(direction, speed, drift)  # type: ignore[arg-type]
+    return ConstantCurrent(direction, speed, drift, oscillation, period)  # type: ignore[arg-type]
 
 
 def _read_phases(top: Table, duration: float) -> list[Phase]:
@@ -723,7 +735,8 @@ def scenario_from_dict(
     scheme_options = _read_scheme_options(top, schemes)
     method = top.take_str("integrator", "euler", choices=("euler", "rk4"))
     q0 = _initial_configuration(top.take_table("initial"), model)
-    current = _read_current(top.take_table("current", keys=("direction", "speed", "drift")))
+    current = _read_current(top.take_table(
+        "current", keys=("direction", "speed", "drift", "oscillation", "period")))
     passive_table = top.take_table("passive")
     passive, tau = "hold", 2.0
     if passive_table is not None:
@@ -746,7 +759,7 @@ def scenario_from_dict(
     tracking, reference = _tracking(top, stack, tables)
     phases = _read_phases(top, duration)
     base = source.parent if source is not None else Path.cwd()
-    plant = read_plant(top.take_table("plant", keys=PLANT_KEYS), model, base)
+    plant = read_plant(top.take_table("plant", keys=PLANT_KEYS), model, base, dt, duration)
     sensors = read_sensors(top.take_table("sensors", keys=SENSOR_KEYS))
     top.finish()
     scenario = Scenario(
@@ -778,6 +791,7 @@ def scenario_from_dict(
     )
     check_periods(tables, stack, dt)
     scenario._check_plant()
+    warn_far_starts(stack, model.state(q0))  # before the events change the targets
     scenario._check_objects(stack)
     try:
         controller = scenario.make_controller(stack=stack)

@@ -1,9 +1,14 @@
 """``uvms-qp compare``: one results.json per scheme, the table, figures, and clean errors."""
 
 import importlib.resources
+import io
 import json
 
+import pytest
+from rich.console import Console
+
 from uvms_qp.cli import main
+from uvms_qp.cli.compare import print_table
 from uvms_qp.sim.comparison import BOUNDS_NOTE, Comparison, SchemeRun
 
 
@@ -75,3 +80,37 @@ def test_compare_of_a_closed_form_scheme_reports_the_bound_violation(tmp_path, c
     table = json.loads((out / "comparison.json").read_text())
     assert table["exceeds_hard_bounds"] == [False, True]
     assert BOUNDS_NOTE in (out / "comparison.md").read_text()
+
+
+# ---- the table follows the console's width
+WANG = ["hqp", "wang_fuzzy_gradient_projection", "wang_fuzzy_gradient_projection_euclidean"]
+
+
+def _wide_comparison():
+    runs = [SchemeRun(name, result=None,  # type: ignore[arg-type]
+                      metrics={"ee_error_max": 1.5e-6 * (k + 1), "vehicle_speed_max": 0.25,
+                               "bound_violation_max": 0.0,
+                               "status_counts": {"optimal": 1000}})
+            for k, name in enumerate(WANG)]
+    return Comparison("paper003_case1_no_payload", "three schemes with long names", runs)
+
+
+def _cells(line, bar):
+    return [cell.strip() for cell in line.split(bar)[1:-1]]
+
+
+@pytest.mark.parametrize("width", [80, 100, 200])
+def test_compare_table_fits_the_console_width_and_shows_every_scheme_once(width):
+    """At its natural width (120 characters) the table fits only the widest console; on the
+    others the schemes that do not fit follow in a second table with the metric column again."""
+    console = Console(width=width, file=io.StringIO(), record=True)
+    print_table(_wide_comparison(), console)
+    lines = console.export_text().splitlines()
+    assert max(len(line) for line in lines) <= width
+    assert "\u2026" not in "".join(lines)  # no cell cut
+    headers = [_cells(line, "\u2503") for line in lines if line.startswith("\u2503")]
+    assert len(headers) == (1 if width == 200 else 2)
+    assert all(header[:2] == ["metric", "unit"] for header in headers)
+    assert [name for header in headers for name in header[2:]] == WANG
+    errors = [_cells(line, "\u2502") for line in lines if line.startswith("\u2502 ee_error_max")]
+    assert [value for row in errors for value in row[2:]] == ["1.5e-06", "3e-06", "4.5e-06"]

@@ -112,13 +112,14 @@ def test_the_payload_loads_the_front_thrusters_and_the_elbow(runs):
 def test_coordination_lowers_the_tool_error_while_the_vehicle_moves(runs):
     # the arm re-solved with the vehicle's measured velocity (Simetti et al. 2014): on the demo
     # the RMS tool error falls by about a fifth and the largest by about a third (the figures of
-    # docs/dynamics.md); every step is coordinated and the hard box still holds
+    # docs/dynamics.md); nearly every step is coordinated and the hard box still holds
     scenario = load_scenario("bluerov2_demo").with_plant("dynamic")
     scenario = dataclasses.replace(
         scenario, plant=dataclasses.replace(scenario.plant, coordination=True))
     coordinated = simulate(scenario).metrics()
     plain = runs["metrics"]
-    assert coordinated["status_counts"] == {"coordinated": STEPS}
+    # a step whose second solve gives no proven answer keeps the first (status of its own)
+    assert coordinated["status_counts"]["coordinated"] >= 0.99 * STEPS
     assert coordinated["bound_violation_max"] == 0.0
     assert coordinated["ee_error_rms"] < 0.9 * plain["ee_error_rms"]
     assert coordinated["ee_error_max"] < 0.8 * plain["ee_error_max"]

@@ -59,17 +59,42 @@ def test_failure_line_names_the_saturated_closed_form():
         "1 of 2 problems)"]
 
 
-def test_terminal_table_folds_a_long_scheme_name_and_cuts_no_number():
-    """The longest scheme names do not fit the solver column of a 100-wide terminal: the name
-    folds onto a second line, and no cell is cut with an ellipsis."""
+def _printed(lines, width):
+    console = Console(width=width, file=io.StringIO(), record=True)
+    print_table(lines, console)
+    return console.export_text()
+
+
+def test_terminal_table_never_splits_a_scheme_name_and_cuts_no_number():
+    """The longest scheme names do not fit beside the numbers in a 100-wide terminal: such a name
+    takes a line of its own, whole, its numbers the next line; no line is wider than the console,
+    no cell is cut with an ellipsis, and a name that fits stays on its numbers' line."""
     long_name = "scheme:wang_fuzzy_gradient_projection_euclidean"
     rec = _rec(long_name, "s1", [123456.7] * 150, "scenarios")
     rec.trials, rec.successes, rec.failures = 1800, 937, {"unproven": 863}
     lines = summarize([_rec("daqp", "s1", [100.0] * 150, "scenarios"), rec])
-    console = Console(width=TERMINAL_WIDTH, file=io.StringIO(), record=True)
-    print_table(lines, console)
-    text = console.export_text()
-    assert "\u2026" not in text
-    assert max(len(line) for line in text.splitlines()) <= TERMINAL_WIDTH
-    assert "937/1800 863u" in text and "123456.7" in text
-    assert long_name in "".join(line.split()[0] for line in text.splitlines() if line.split())
+    for width in (TERMINAL_WIDTH, 80):
+        text = _printed(lines, width)
+        rows = text.splitlines()
+        assert "\u2026" not in text
+        assert max(len(row) for row in rows) <= width
+        at = rows.index(long_name)  # the whole name, alone on its line
+        assert rows[at + 1].split() == ["937/1800", "863u", "123456.7", "123456.7", "1234.57",
+                                        "0.0e+00", "-", "0"]
+        assert rows[at + 1].index("937/1800") > len("daqp")
+        daqp = next(row for row in rows if row.startswith("daqp"))
+        assert daqp.split()[:3] == ["daqp", "150/150", "100.0"]
+        header = next(row for row in rows if row.startswith("solver"))
+        success = "937/1800 863u"  # right-aligned under its header
+        assert (header.index("success") + len("success")
+                == rows[at + 1].index(success) + len(success))
+
+
+def test_terminal_table_keeps_a_scheme_name_beside_its_numbers_when_it_fits():
+    long_name = "scheme:wang_fuzzy_gradient_projection_euclidean"
+    lines = summarize([_rec("daqp", "s1", [100.0] * 150, "scenarios"),
+                       _rec(long_name, "s1", [50.0] * 150, "scenarios")])
+    rows = _printed(lines, 140).splitlines()
+    row = next(row for row in rows if row.startswith(long_name))
+    assert row.split()[:3] == [long_name, "150/150", "50.0"]
+    assert max(len(row) for row in rows) <= 140

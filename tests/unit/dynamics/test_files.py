@@ -182,3 +182,20 @@ def test_a_bad_thruster_names_file_and_key(tmp_path, change, key):
     with pytest.raises(ParameterError) as info:
         load_plant_parameters(path)
     assert f"{path}: {key}" in str(info.value)
+
+
+def test_a_link_of_a_joint_the_base_lacks_says_so(tmp_path):
+    path = write(tmp_path, 'name = "x"\nbase = "bluerov2_heavy_von_benzon_2022"\n'
+                 "[links.axis_z]\nmass = 0.2\n")
+    with pytest.raises(ParameterError, match=r"links\.axis_z\.inertia: missing: 'axis_z' is not "
+                       r"a joint of the base set .*axis_e"):
+        load_plant_parameters(path)
+
+
+def test_a_body_a_file_changes_names_the_file_as_its_source(tmp_path):
+    path = write(tmp_path, 'name = "x"\nbase = "bluerov2_heavy_von_benzon_2022"\n'
+                 "[vehicle]\nmass = 14.0\n")
+    params = load_plant_parameters(path)
+    assert params.vehicle.source.startswith(f"{path} over von Benzon")
+    assert params.links["axis_b"].source == load_plant_parameters(EXAMPLE).links[
+        "axis_e"].source  # untouched links keep the base's

@@ -103,6 +103,14 @@ def test_missing_urdf(tmp_path):
     assert isinstance(info.value, FileNotFoundError)
 
 
+def test_missing_urdf_given_relative_is_named_resolved(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ModelFileError) as info:
+        Model.from_urdf("arms/nowhere.urdf")
+    assert str(info.value) == (f"URDF 'arms/nowhere.urdf': no such file ({tmp_path}/arms/"
+                               f"nowhere.urdf, relative to the working directory {tmp_path})")
+
+
 @pytest.mark.parametrize(
     ("text", "match"),
     [

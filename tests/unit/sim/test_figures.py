@@ -6,6 +6,7 @@ Read through the matplotlib objects (axis labels, lines, limits, text extents), 
 from __future__ import annotations
 
 import os
+from importlib import resources
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -14,8 +15,10 @@ import pytest
 from tests.support.short_scenarios import bundled_scenarios, short_steps
 from uvms_qp.cli import main
 from uvms_qp.sim import _figures
+from uvms_qp.sim._figures import PAYLOAD_LABEL, RATE_WINDOW_LABEL, event_label
 from uvms_qp.sim.comparison import compare
 from uvms_qp.sim.comparison_figures import comparison_figure_objects, comparison_figures
+from uvms_qp.sim.dynamic_figures import dynamic_builders
 from uvms_qp.sim.plots import POSITION_SPAN, plot_results, run_figures
 from uvms_qp.sim.runner import simulate
 from uvms_qp.sim.scenario import load_scenario
@@ -168,6 +171,51 @@ def test_levels_are_numbered_from_0_as_in_summaries(runs, figures):
 def test_run_figures_have_no_clipped_labels(runs, figures, kind):
     for fig in figures(runs[kind][1]).values():
         _labels_inside(fig)
+
+
+def _legend_texts(fig):
+    return {text.get_text() for ax in fig.axes if ax.get_legend() is not None
+            for text in ax.get_legend().get_texts()}
+
+
+@pytest.fixture(scope="module")
+def pick_up_runs(tmp_path_factory):
+    """The demo for 1 s with its payload picked up at 0.5 s: on the kinematic and the dynamic
+    plant (command-rate bounds, an event, the payload's attachment)."""
+    text = resources.files("uvms_qp.scenarios").joinpath("bluerov2_demo.toml").read_text()
+    text = text.split("[[phases]]")[0].replace("duration = 30.0", "duration = 1.0")
+    assert text.count("time = 15.0") == 2  # the event and the plant's payload
+    path = tmp_path_factory.mktemp("pick_up") / "pick_up.toml"
+    path.write_text(text.replace("time = 15.0", "time = 0.5"))
+    scenario = load_scenario(path)
+    return simulate(scenario), simulate(scenario.with_plant("dynamic"))
+
+
+def test_event_lines_and_the_command_rate_window_are_named_in_every_figure_that_draws_them(
+        pick_up_runs, figures):
+    kinematic, dynamic = pick_up_runs
+    [event] = kinematic.events
+    assert event["task"] == "payload" and dynamic.dynamics.payload_time == pytest.approx(0.5)
+    label = event_label(event)
+    assert label == "event 0.5 s: payload force = 20"
+    dynamic_names = {name for name, _ in dynamic_builders(dynamic)}
+    assert dynamic_names == {"thrusters.png", "velocity_tracking.png",
+                             "attitude_disturbance.png", "joint_torques.png"}
+    for result in (kinematic, dynamic):
+        for name, fig in figures(result).items():
+            lines = [line for ax in fig.axes for line in ax.get_lines()]
+            drawn = {line.get_label() for line in lines}
+            named = _legend_texts(fig)
+            assert label in drawn and label in named, name  # every figure marks the event
+            if name in dynamic_names:
+                assert PAYLOAD_LABEL in drawn and PAYLOAD_LABEL in named, name
+            if name == "rates.png":
+                assert RATE_WINDOW_LABEL in drawn and RATE_WINDOW_LABEL in named
+            # no vertical dotted line without a name in the legend
+            for line in lines:
+                x = np.asarray(line.get_xdata(), dtype=float)
+                if line.get_linestyle() == ":" and x.size == 2 and x[0] == x[1]:
+                    assert line.get_label() in named, (name, line.get_label())
 
 
 # --- writing ------------------------------------------------------------------------------------

@@ -64,9 +64,12 @@ def test_kinematic_scenarios_keep_their_dynamic_settings_for_the_command_line_ov
     ('parameters = "bluerov3"', "plant.parameters", "bluerov2_heavy_von_benzon_2022"),
     ('parameters = "bluerov2_wu_2018"\nfile = "x.toml"', "plant.file", "not both"),
     ('file = "no_such_plant.toml"', "plant.file", "no_such_plant.toml"),
-    ('servo_rate = 15.0\ntype = "dynamic"', "plant", "servo_rate"),
-    ('physics_step = 0.003\ntype = "dynamic"', "plant", "physics_step"),
-    ('supply_voltage = 14.0\ntype = "dynamic"', "plant", "14"),
+    ('servo_rate = 15.0\ntype = "dynamic"', "plant.servo_rate", "must divide"),
+    ('physics_step = 0.003\ntype = "dynamic"', "plant.physics_step", "must divide"),
+    ('physics_step = 1e-7', "plant.physics_step", "0.0001"),
+    ('supply_voltage = 14.8', "plant.supply_voltage", "14.8 V"),
+    ('feedforward = "exact"', "plant.feedforward", "nominal"),
+    ('[plant.payload]\ntime = 45.0\nmass = 1.0', "plant.payload.time", "0.5"),
     ('coordinate = true', "plant.coordinate", "coordination"),
     ('[plant.payload]\ntime = 0.2\nmass = -1.0', "plant.payload.mass", "positive"),
     ('[plant.gains]\nproportional = [1, 2, 3]', "plant.gains.proportional", "6"),
@@ -79,13 +82,21 @@ def test_bad_plant_tables_are_config_errors_at_their_path(table, path, words):
     assert words in str(info.value)
 
 
-def test_a_model_without_dynamic_data_is_refused_naming_what_is_missing(tmp_path, capsys):
-    sc = load_scenario("paper000_quintic")
-    with pytest.raises(ConfigError, match=r"soylu_planar.*no plant parameters"):
+@pytest.mark.parametrize(("name", "words"), [
+    ("paper000_quintic", "'soylu_planar' has a planar vehicle"),
+    ("paper002_line_paper_order", "'nenchev_pa10_arm' has a fixed vehicle"),
+    ("paper003_case1_no_payload", "'wang_9dof' has no plant parameters"),
+])
+def test_a_model_without_dynamic_data_is_refused_naming_what_is_missing(name, words, tmp_path,
+                                                                        capsys):
+    sc = load_scenario(name)
+    with pytest.raises(ConfigError, match=words):
         sc.with_plant("dynamic", "--plant")
-    code = main(["run", "paper000_quintic", "--plant", "dynamic", "--out", str(tmp_path)])
+    code = main(["run", name, "--plant", "dynamic", "--out", str(tmp_path)])
     err = capsys.readouterr().err
-    assert code == 2 and "--plant" in err and "mass, inertia" in err
+    assert code == 2 and "--plant" in err and words in err
+    if "no plant parameters" in words:  # what a plant needs, and how a scenario file gives it
+        assert "mass, inertia" in err and "[plant] file" in err
     assert "Traceback" not in err and not (tmp_path / "results.json").exists()
 
 
@@ -138,10 +149,29 @@ def test_a_diverging_plant_ends_the_run_keeping_the_steps_before_it(monkeypatch,
     path = tmp_path / "s.toml"
     path.write_text(bluerov_scenario("duration = 0.5", ""))
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "--no-plots"]) == 1
-    err = capsys.readouterr().err
+    captured = capsys.readouterr()
+    err = captured.err
     assert "stopped at t = 0.23 s" in err and "diverged" in err
+    # no summary of the steps that did run, nor a note on the duration, to mislead
+    assert "ee_error_max" not in captured.out and "note:" not in captured.out
     record = json.loads((tmp_path / "out" / "results.json").read_text())
     assert record["stopped"]["step"] == 2 and record["steps"] == 2
+
+
+def test_the_record_says_which_plant_and_sensors_ran(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(bluerov_scenario("duration = 0.2", '\n[plant]\ntype = "dynamic"\n'
+                                     'servo_rate = 50.0\ncoordination = true\n'
+                                     '[sensors]\nposition_noise = 0.01\nseed = 3\n'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--no-plots",
+                 "--quiet"]) == 0
+    record = json.loads((tmp_path / "out" / "results.json").read_text())
+    settings = record["plant_settings"]
+    assert settings["type"] == "dynamic" and settings["coordination"] is True
+    assert settings["parameters"] == "bluerov2_heavy_von_benzon_2022"
+    assert settings["servo_rate"] == 50.0 and settings["feedforward"] == "model"
+    assert record["sensors"]["position_noise"] == 0.01 and record["sensors"]["seed"] == 3
+    assert record["kinematic_reference"]["metrics"]["nan_steps"] == 0
 
 
 def test_the_payload_of_a_plant_table_is_attached_at_its_time():
@@ -160,3 +190,82 @@ def test_scenario_build_takes_a_plant_and_sensors():
     built = Scenario.build(sc.model, sc.build_stack(), sc.q0, dt=0.1, duration=0.2, plant=spec)
     assert built.plant.kind == "dynamic" and simulate(built).plant == "dynamic"
     assert dataclasses.replace(built, sensors=None).sensors is None
+
+
+def _own_plant(tmp_path, text: str) -> Scenario:
+    (tmp_path / "mine.toml").write_text('name = "mine"\nbase = "bluerov2_heavy_von_benzon_2022"\n'
+                                        + text)
+    path = tmp_path / "s.toml"
+    path.write_text(bluerov_scenario("duration = 0.2",
+                                     '\n[plant]\ntype = "dynamic"\nfile = "mine.toml"\n'))
+    return load_scenario(path)
+
+
+FOUR = """
+[thrusters]
+actuated = ["u", "v", "w", "r"]
+[[thrusters.thrusters]]
+position = [-0.2, -0.15, 0.0]
+axis = [1.0, 0.0, 0.0]
+model = "T200"
+[[thrusters.thrusters]]
+position = [-0.2, 0.15, 0.0]
+axis = [1.0, 0.0, 0.0]
+model = "T200"
+[[thrusters.thrusters]]
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+model = "T200"
+[[thrusters.thrusters]]
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+model = "T200"
+"""
+
+
+def test_thrusters_that_leave_a_commanded_dof_passive_are_refused(tmp_path):
+    # the model commands roll and pitch; four thrusters cannot give them
+    with pytest.raises(ConfigError, match=r"^plant: .*leaves p, q passive"):
+        _own_plant(tmp_path, FOUR)
+
+
+def test_given_gains_replace_a_placement_that_does_not_suit_the_vehicle(tmp_path):
+    # roll damping of 10 N m s/rad on 0.45 kg m^2: faster than the placement's 4 rad/s allows
+    damped = "[vehicle]\nlinear_damping = [13.7, 0, 33, 10, 0.8, 0]\n"
+    with pytest.raises(ConfigError, match=r"DOF p .*\[plant\.gains\]"):
+        _own_plant(tmp_path, damped)
+    path = tmp_path / "g.toml"
+    path.write_text(bluerov_scenario("duration = 0.2", (
+        '\n[plant]\ntype = "dynamic"\nfile = "mine.toml"\n[plant.gains]\n'
+        "proportional = [145, 165, 224, 1, 2, 5]\nintegral = [318, 330, 515, 7, 6, 9]\n")))
+    run = simulate(load_scenario(path))
+    assert run.stopped is None and run.plant_settings["gains"]["proportional"][3] == 1.0
+
+
+def test_the_run_starts_trimmed_on_what_the_loop_feeds_forward():
+    # trimmed on the restoring wrench, the thrusters hold the vehicle from the first tick; with
+    # nothing fed forward they start at zero and the vehicle sinks and pitches before the
+    # integral catches up
+    heave = {}
+    for feedforward in ("model", "none"):
+        sc = scenario(f'\n[plant]\ntype = "dynamic"\nfeedforward = "{feedforward}"\n',
+                      header="duration = 0.3")
+        run = simulate(sc)
+        heave[feedforward] = np.abs(run.dynamics.body_velocity[:, 2]).max()
+        if feedforward == "model":
+            plant = sc.make_plant()
+            plant.start(sc.q0)
+            hold = plant.physics.restoring_wrench(sc.q0)
+            np.testing.assert_allclose(plant.layout.matrix @ plant.thrusters.forces, hold,
+                                       atol=1e-6)
+    assert heave["none"] > 2.0 * heave["model"]
+
+
+def test_a_slowly_varying_current_reaches_the_dynamic_plant():
+    sc = scenario('\n[current]\ndirection = 0.5\nspeed = 0.2\noscillation = 0.1\nperiod = 20.0\n'
+                  '[plant]\ntype = "dynamic"\n')
+    water = sc.make_plant().physics.current
+    assert not water.steady
+    np.testing.assert_allclose(water.velocity(5.0), 0.3 * np.array([np.cos(0.5), np.sin(0.5),
+                                                                    0.0]))
+    assert sc.current.oscillation == 0.1

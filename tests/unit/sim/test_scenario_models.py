@@ -107,6 +107,26 @@ def test_urdf_path_is_relative_to_the_scenario_file(tmp_path):
         load_scenario(tmp_path / "mine.toml")
 
 
+def test_a_missing_urdf_is_named_by_its_absolute_path_and_what_it_was_relative_to(
+        tmp_path, monkeypatch):
+    """Loaded from another folder by a relative path, the scenario's relative ``urdf`` is
+    reported as the absolute file it looked for, and the folder it was taken relative to."""
+    text = SCENARIO.read_text().replace('urdf = "three_joint_arm.urdf"', 'urdf = "arms/arm.urdf"')
+    (tmp_path / "scenarios").mkdir()
+    (tmp_path / "scenarios" / "mine.toml").write_text(text)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError) as info:
+        load_scenario(Path("scenarios") / "mine.toml")
+    folder = tmp_path / "scenarios"
+    assert str(info.value) == (f"model.urdf: URDF file not found: {folder / 'arms' / 'arm.urdf'} "
+                               f"('arms/arm.urdf' taken relative to {folder})")
+    absolute = text.replace('urdf = "arms/arm.urdf"', f'urdf = "{tmp_path / "gone.urdf"}"')
+    (tmp_path / "scenarios" / "mine.toml").write_text(absolute)
+    with pytest.raises(ConfigError) as info:
+        load_scenario(Path("scenarios") / "mine.toml")
+    assert str(info.value) == f"model.urdf: URDF file not found: {tmp_path / 'gone.urdf'}"
+
+
 def test_mount_in_ros_axes_is_converted_to_the_body_frame():
     mount = 'mount = { xyz = [0.3, 0.1, -0.2], rpy = [0.0, 0.0, 0.5], axes = "flu" }'
     text = _scenario_text(f'[model]\nurdf = "{URDF}"\n{mount}')

@@ -4,6 +4,7 @@ live matplotlib view and ``uvms-qp run --view``."""
 from __future__ import annotations
 
 import io
+import json
 import os
 import re
 import time
@@ -195,6 +196,50 @@ def test_view_page_shows_the_robot_in_chromium_without_console_errors(demo, tmp_
     hidden = _classes(report.shots[5])
     assert hidden[0] < 0.02 * arm and hidden[1] < 0.02 * body, hidden
     assert elapsed < 60
+
+
+def _ink(png: bytes) -> np.ndarray:
+    """Pixels of a screenshot that are not the page's white background."""
+    rgb = matplotlib.image.imread(io.BytesIO(png), format="png")[..., :3]
+    return (rgb < 0.9).any(axis=2)
+
+
+@needs_plotly
+@pytest.mark.skipif(chromium() is None and not os.environ.get("CI"),
+                    reason="chromium is not installed (CI installs it and runs this test)")
+@pytest.mark.parametrize(("width", "height"), [(1000, 700), (1600, 1000)])
+def test_view_page_shows_its_whole_scene_and_controls(demo, tmp_path, width, height):
+    """Nothing of the 3-D scene (the axes' cube, its tick labels and titles, the robot) reaches
+    the edge of the scene's area, where WebGL would cut it, and the slider's labels end above the
+    bottom of the page."""
+    model, result = demo
+    path = write_view(model, result, tmp_path / "run.html", max_frames=20)
+    div = "document.getElementById('uvms-qp-view')"
+    still = "{frame: {duration: 0, redraw: true}, mode: 'immediate'}"
+    report = load_page(
+        path, width=width, height=height, settle=0.3,
+        ready=f"{div} && {div}.querySelector('.gl-container canvas') !== null",
+        steps=(
+            # the legend lies over the scene's corner: hidden, what is left is the scene
+            f"Plotly.animate({div}, ['19'], {still}).then(() => Plotly.relayout({div}, "
+            f"{{showlegend: false}})).then(() => JSON.stringify({div}._fullLayout.scene._scene"
+            ".container.getBoundingClientRect()))",
+        ),
+    )
+    assert report.errors == [], report.errors
+    box = json.loads(report.values[0])
+    top, bottom = round(box["top"]), round(box["bottom"])
+    left, right = round(box["left"]), round(box["right"])
+    assert (left, right) == (0, width) and bottom - top > 0.75 * height  # the page's width
+    ink = _ink(report.shots[0])
+    scene = ink[top:bottom, left:right]
+    rows = np.flatnonzero(scene.any(axis=1))
+    columns = np.flatnonzero(scene.any(axis=0))
+    margins = rows[0], bottom - top - 1 - rows[-1], columns[0], right - left - 1 - columns[-1]
+    assert min(margins) >= 10, margins  # top, bottom, left, right [px]
+    assert rows[-1] - rows[0] > 0.6 * (bottom - top)  # and the scene is not a speck
+    below = np.flatnonzero(ink[bottom:].any(axis=1))
+    assert below.size and bottom + below[-1] < height - 3  # the slider's labels are whole
 
 
 # --- live view ----------------------------------------------------------------------------------

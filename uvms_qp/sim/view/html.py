@@ -47,6 +47,11 @@ COLORS = {
     "target": "rgb(200, 0, 0)",
     "target_path": "rgb(120, 120, 120)",
 }
+#: Camera of a spatial or fixed-base view (plotly's normalised scene units): from ahead and to
+#: the side, far enough that the whole cube, its tick labels and axis
+#: titles stay inside the scene on a wide page (checked at 1000x700 and 1600x1000 in headless
+#: Chromium), and aimed a little below the centre so the margins above and below are even.
+SIDE_CAMERA = {"eye": {"x": 1.5, "y": -1.5, "z": 0.96}, "center": {"x": 0.0, "y": 0.0, "z": -0.15}}
 #: Trace names, in the figure's order; the animated ones are updated by every frame.
 TRACES = ("target path", "tool path", "body", "body edges", "arm", "tool", "target")
 ANIMATED = (1, 2, 3, 4, 5, 6)
@@ -134,7 +139,7 @@ def _axes(kind: str, low: FloatArray, high: FloatArray) -> dict[str, Any]:
                            "projection": {"type": "orthographic"}}
         scene["zaxis"]["visible"] = False
     else:  # from ahead and to the side of the vehicle (spatial) or the base (fixed)
-        scene["camera"] = {"eye": {"x": 1.25, "y": -1.25, "z": 0.8}}
+        scene["camera"] = {key: dict(value) for key, value in SIDE_CAMERA.items()}
     return scene
 
 
@@ -230,7 +235,7 @@ def view_figure(model: Any, result: SimulationResult, *, max_frames: int = MAX_F
                          "args": [[None], {**still, "frame": {"duration": 0, "redraw": False}}]}],
         }],
         sliders=[{
-            "x": 0.12, "y": 0.0, "len": 0.86, "pad": {"t": 20},
+            "x": 0.12, "y": 0.0, "len": 0.86, "pad": {"t": 20, "b": 12},  # its labels whole
             "currentvalue": {"prefix": "t = ", "suffix": " s"},
             "steps": [{"label": f"{t:.2f}", "method": "animate", "args": [[f"{j}"], still],
                        "execute": False} for j, t in enumerate(times)],
