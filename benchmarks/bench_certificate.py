@@ -41,6 +41,7 @@ from uvms_qp.bench.problems import family  # noqa: E402
 from uvms_qp.bench.stacks import demo_stack  # noqa: E402
 from uvms_qp.controller import Controller  # noqa: E402
 from uvms_qp.hqp import HierarchySolver, Problem, normalize_problem  # noqa: E402
+from uvms_qp.hqp.backends.daqp_binding import open_daqp  # noqa: E402
 from uvms_qp.hqp.certificate import Certifier, slacks  # noqa: E402
 from uvms_qp.model import load_model  # noqa: E402
 
@@ -76,7 +77,7 @@ def family_cases(name: str, count: int) -> list:
 def _case(problem, x):
     s = slacks(problem, x)
     residuals = [float(v) for v in np.sqrt(problem.G[1:].dot(s * s))]
-    cert = Certifier()(problem, x, s, residuals)
+    cert = Certifier(open_daqp)(problem, x, s, residuals)
     unmet = sum(c.verdict != "met" for c in cert.levels)
     return problem, x, s, residuals, unmet, cert
 
@@ -84,7 +85,7 @@ def _case(problem, x):
 def timed(cases, repeat: int):
     """Best-of-``repeat`` wall time of one call per case [us], each case written into one
     problem of its shape (the controller's situation: one problem, filled every tick)."""
-    certifier = Certifier()
+    certifier = Certifier(open_daqp)
     shared: dict = {}
     times, unmet, verdicts = [], [], Counter()
     for problem, x, s, residuals, u, cert in cases:
@@ -152,7 +153,7 @@ def run_calls(path: str, passes: int, certify: bool) -> None:
     certified with the measurement's slacks and residuals (as the solver asks)."""
     cases = [_case(problem, x)[:4] for problem, x in load_cases(Path(path))]
     shared = cases[0][0].copy()
-    certifier = Certifier()
+    certifier = Certifier(open_daqp)
     certifier(shared, cases[0][1])  # the workspace of the shared problem
     for _ in range(passes):
         for problem, x, s, residuals in cases:

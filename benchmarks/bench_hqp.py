@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from uvms_qp.hqp import HierarchySolver, Rows, available_solvers, normalize_problem, solve_hierarchy
-from uvms_qp.hqp.backends.daqp_binding import NativeDaqp, native_available
+from uvms_qp.hqp.backends.daqp_binding import NativeDaqp
 
 SIZES = (6, 3, 1, 4)
 BOXES = {"wide": 100.0, "tight": 0.5, "saturated": 0.02}
@@ -87,16 +87,15 @@ def bench(n: int, box: str, repeat: int, cascade_repeat: int) -> list[tuple[str,
         return model.solve()
 
     fns: dict[str, Callable[[], Any]] = {}
-    if native_available():
-        native = NativeDaqp()
-        native.setup(H, f, A.copy(), bu.copy(), bl.copy(), sense.copy(), bp)
-        native.settings = {"rho_soft": 1e-8, "primal_tol": 1e-10}
+    native = NativeDaqp()
+    native.setup(H, f, A.copy(), bu.copy(), bl.copy(), sense.copy(), bp)
+    native.settings = {"rho_soft": 1e-8, "primal_tol": 1e-10}
 
-        def native_call():
-            native.refresh()
-            return native.solve()
+    def native_call():
+        native.refresh()
+        return native.solve()
 
-        fns["native"] = native_call
+    fns["native"] = native_call
 
     c_times: list[float] = []
 

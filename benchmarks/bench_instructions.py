@@ -15,11 +15,14 @@ so a different ``N`` measures a different stretch of it.
 Needs valgrind (Debian: ``apt-get install valgrind``) and Pink (``pip install -e ".[pink]"``).
 Each loop takes about a minute under valgrind.
 
-    python benchmarks/bench_instructions.py [--ticks 2000] [--warmup 50] [--parts]
+    python benchmarks/bench_instructions.py [--ticks 2000] [--warmup 50] [--parts] [--solves]
 
 ``--parts`` first splits our tick (at the states of the closed loop's first ``W`` ticks, then held):
 ``model.state``, the assembler's rows, box, weights and checks, the fallback ladder (DAQP,
-measurement, the hierarchy result) and the step result, cumulatively.
+measurement, the hierarchy result) and the step result, cumulatively. ``bare`` is our loop with
+the optimality certificate and the damping screen switched off. ``--solves`` also counts one
+``solve_hierarchy`` call against ``daqp.Model.update`` + ``solve`` on ``bench_hqp.py``'s problem
+at n = 10 (per solve).
 """
 
 from __future__ import annotations
@@ -36,8 +39,14 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 LOOPS = {
     "ours": "uvms-qp, 4-level stack + all bounds",
+    "bare": "uvms-qp, the same without certificate and damping",
     "small": "uvms-qp, Pink's content (tool + posture, 1 level)",
     "pink": "Pink, FrameTask + PostureTask + limits",
+}
+#: one solve of ``bench_hqp.py``'s problem (n = 10, levels [6, 3, 1, 4], wide box), per "tick"
+SOLVES = {
+    "api10": "solve_hierarchy, n = 10 (validation, DAQP, measurement, certificate)",
+    "model10": "daqp.Model update + solve, the same data",
 }
 #: cumulative parts of our tick, for ``--parts`` (each loop runs the previous one and more)
 PARTS = {
@@ -76,11 +85,46 @@ def run_loop(which: str, warmup: int, ticks: int) -> None:
         return
     if which == "pink":
         tick = bc.pink_stepper(model, q0, traj, "daqp")[0]
+    elif which == "bare":
+        tick, _, _, ctrl = bc.ours_stepper(model, q0, traj, "daqp")
+        ctrl.safe.primary.certify = None  # no optimality certificate
+        ctrl.assembler.damping = None  # no damping screen
     else:
         stack = bc.small_stack(traj) if which == "small" else None
         tick = bc.ours_stepper(model, q0, traj, "daqp", stack)[0]
     for k in range(warmup + ticks):
         tick(k)
+
+
+def run_solves(which: str, warmup: int, ticks: int) -> None:
+    """``warmup + ticks`` solves of ``bench_hqp.py``'s problem at n = 10 (the counted process)."""
+    sys.path.insert(0, str(HERE))
+    import bench_hqp as bh
+    import daqp
+    import numpy as np
+
+    from uvms_qp.hqp import solve_hierarchy
+
+    n = 10
+    pairs = bh.make(n)
+    lo, hi = -np.full(n, bh.BOXES["wide"]), np.full(n, bh.BOXES["wide"])
+    if which == "api10":
+        levels = [[pair] for pair in pairs]
+        for _ in range(warmup + ticks):
+            solve_hierarchy(levels, lo, hi, solver="daqp")
+        return
+    A = np.vstack([A for A, _ in pairs])
+    b = np.concatenate([b for _, b in pairs])
+    bu, bl = np.concatenate((hi, b)), np.concatenate((lo, b))
+    model = daqp.Model()
+    model.setup(np.eye(n), np.zeros(n), A, bu, bl, np.zeros(bu.size, dtype=np.intc),
+                break_points=np.cumsum([n, *bh.SIZES]).astype(np.intc))
+    settings = model.settings
+    settings.update(rho_soft=1e-8, primal_tol=1e-10)
+    model.settings = settings
+    for _ in range(warmup + ticks):
+        model.update(A=A, bupper=bu, blower=bl)
+        model.solve()
 
 
 def count(which: str, warmup: int, ticks: int) -> int:
@@ -104,10 +148,16 @@ def main() -> None:
     parser.add_argument("--warmup", type=int, default=50, help="ticks before counting")
     parser.add_argument("--parts", action="store_true",
                         help="also split our tick into state, rows, ladder and result")
-    parser.add_argument("--run", choices=sorted({*LOOPS, *PARTS}), help=argparse.SUPPRESS)
+    parser.add_argument("--solves", action="store_true",
+                        help="also count solve_hierarchy against daqp.Model at n = 10")
+    parser.add_argument("--run", choices=sorted({*LOOPS, *PARTS, *SOLVES}),
+                        help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.run:
-        run_loop(args.run, args.warmup, args.ticks)
+        if args.run in SOLVES:
+            run_solves(args.run, args.warmup, args.ticks)
+        else:
+            run_loop(args.run, args.warmup, args.ticks)
         return
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind not found: install it (Debian: apt-get install valgrind)")
@@ -126,7 +176,16 @@ def main() -> None:
         print(f"{label:<52} {per_tick[which] / 1e3:9.1f} k instructions per tick")
     pink = per_tick["pink"]
     print(f"ratio ours / Pink (instructions): 4-level stack {per_tick['ours'] / pink:.2f}, "
+          f"without certificate and damping {per_tick['bare'] / pink:.2f}, "
           f"same content {per_tick['small'] / pink:.2f}")
+    if args.solves:
+        per_solve = {}
+        for which, label in SOLVES.items():
+            base = count(which, args.warmup, 0)
+            per_solve[which] = (count(which, args.warmup, args.ticks) - base) / args.ticks
+            print(f"{label:<72} {per_solve[which] / 1e3:9.1f} k instructions per solve")
+        print(f"ratio solve_hierarchy / daqp.Model (instructions): "
+              f"{per_solve['api10'] / per_solve['model10']:.2f}")
 
 
 if __name__ == "__main__":

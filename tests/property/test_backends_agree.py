@@ -116,3 +116,47 @@ def test_nullspace_damps_a_near_singular_level_and_does_not_call_it_optimal():
     assert np.abs(damped.x).max() <= bound and damped.info["damped"] == (0,)
     assert damped.status is Status.UNPROVEN and not damped.ok
     assert "not proven optimal" in damped.message
+
+
+def closed_form_cases(count):
+    """Equality hierarchies of the fuzz draws (zero, tiny, repeated, scaled rows), no box."""
+    from uvms_qp.testing.fuzz import _problem, draw
+
+    out = []
+    seed = 0
+    while len(out) < count:
+        case = draw(seed, ("nullspace",))
+        seed += 1
+        problem = _problem(case)
+        head, n = problem.head, problem.n
+        if case.mh or (problem.lo[head:] != problem.hi[head:]).any():
+            continue
+        problem.lo[:n], problem.hi[:n] = -np.inf, np.inf
+        out.append((case.seed, problem))
+    return out
+
+
+def test_closed_form_asks_no_more_than_a_proven_optimum_and_labels_damping_truthfully():
+    """Without a box, the closed form's answer is never larger than a proven optimum's (its
+    damping only shrinks weak directions), and a damped answer is ``optimal`` only with every
+    level met or certified (its message then claims nothing else)."""
+    closed, exact = HierarchySolver("nullspace"), HierarchySolver("daqp")
+    reference = HierarchySolver("cascade:quadprog")
+    damped = 0
+    for seed, problem in closed_form_cases(300):
+        result = closed.solve_problem(problem)
+        if "damped" in result.info:
+            damped += 1
+            cert = result.certificate
+            if result.status is Status.OPTIMAL:
+                assert cert is None or cert.ok, seed
+                assert "not the undamped optimum" not in result.message, seed
+            else:
+                assert result.status is Status.UNPROVEN and not cert.ok, seed
+        proven = exact.solve_problem(problem)
+        if proven.status is not Status.OPTIMAL:
+            proven = reference.solve_problem(problem)
+        if proven.status is Status.OPTIMAL:
+            size = float(np.linalg.norm(proven.x))
+            assert np.linalg.norm(result.x) <= 2.0 * size + 1e-9, (seed, size)
+    assert damped  # the draws do reach the damping

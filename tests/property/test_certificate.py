@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 from tests.support.oracle.lexicographic import Oracle
 from uvms_qp.bench.problems import family
 from uvms_qp.hqp import HierarchySolver, normalize_problem
-from uvms_qp.hqp.certificate import CERTIFIED, IMPROVABLE, MET, certify, repair
+from uvms_qp.hqp.backends.daqp_binding import open_daqp
+from uvms_qp.hqp.certificate import CERTIFIED, IMPROVABLE, MET, Certifier, certify, repair
 
 #: families where the lexicographic optimum is well posed (a 1e-9 change of a higher level
 #: cannot buy a lower one more than 1e-6), so certificate and oracle must agree exactly
@@ -28,7 +29,7 @@ def arrays(problem):
 
 
 def judge(problem, x):
-    cert = certify(problem, x, exact=True)
+    cert = certify(problem, x, exact=True, least_distance=open_daqp)
     better = [c.better for c in cert.levels if c.better is not None]
     return cert, Oracle(*arrays(problem)).judge(x, candidates=better)
 
@@ -52,7 +53,7 @@ def test_a_lower_level_repeating_a_higher_row_cannot_hide_a_degraded_top_level()
     assert cert.levels[0].verdict == IMPROVABLE
     assert cert.levels[0].improvement == pytest.approx(2.0, abs=1e-9)
     assert_agree(cert, judged)
-    fixed = repair(problem, x)
+    fixed = repair(problem, x, certifier=Certifier(open_daqp))
     assert fixed.repaired and fixed.certificate.ok
     assert fixed.certificate.levels[0].residual < 1e-9
     assert fixed.certificate.levels[1].residual == pytest.approx(9.0, abs=1e-9)
@@ -61,9 +62,9 @@ def test_a_lower_level_repeating_a_higher_row_cannot_hide_a_degraded_top_level()
 def test_the_exact_answer_is_certified_and_a_perturbed_one_is_not():
     a = np.array([[1.0, 2.0]])
     problem = normalize_problem([[(a, [10.0])], [(a, [1.0])]])
-    cert = certify(problem, np.array([2.0, 4.0]))
+    cert = certify(problem, np.array([2.0, 4.0]), least_distance=open_daqp)
     assert [c.verdict for c in cert.levels] == [MET, CERTIFIED]
-    assert not certify(problem, np.array([2.0, 3.9])).ok
+    assert not certify(problem, np.array([2.0, 3.9]), least_distance=open_daqp).ok
 
 
 @pytest.mark.parametrize("fam", WELL_POSED)
@@ -86,7 +87,7 @@ def test_repair_reaches_a_certified_point_from_a_perturbed_answer(fam):
         problem = normalize_problem(p.levels_rows(), p.lower, p.upper)
         res = HierarchySolver("cascade:daqp").solve_problem(problem)
         x = np.clip(res.x + rng.normal(scale=0.05, size=p.n), p.lower, p.upper)
-        fixed = repair(problem, x)
+        fixed = repair(problem, x, certifier=Certifier(open_daqp))
         if not fixed.repaired:
             assert fixed.certificate.ok or "failed" in fixed.message or (
                 fixed.certificate.ill_posed)
@@ -95,7 +96,7 @@ def test_repair_reaches_a_certified_point_from_a_perturbed_answer(fam):
         oracle = Oracle(*arrays(problem))
         judged = oracle.judge(fixed.x)
         # nothing above the first failing level got worse, and the result is optimal
-        first = certify(problem, x).first_failure
+        first = certify(problem, x, least_distance=open_daqp).first_failure
         for j, k in zip(judged, range(len(judged)), strict=True):
             assert j.improvement <= 1e-6 * j.scale
             if k < first:
@@ -116,5 +117,5 @@ def test_certificate_agrees_with_the_oracle_on_shifted_answers(seed, shift):
 def test_a_point_outside_the_box_is_not_certified():
     a = np.array([[1.0, 0.0]])
     problem = normalize_problem([[(a, [0.5])]], lower=[-1, -1], upper=[1, 1])
-    cert = certify(problem, np.array([1.5, 0.0]))
+    cert = certify(problem, np.array([1.5, 0.0]), least_distance=open_daqp)
     assert not cert.inside and not cert.ok

@@ -15,6 +15,9 @@ active) or ``saturated`` (targets far outside, every level pushed against the bo
   1e-3..1e3 (``spread``).
 * ``no_box_repeat``: a lower level repeating a row of a higher one with no box on some or all
   variables (the canonical case: level 0 ``x1 + 2 x2 = 10``, level 1 the same row ``= 1``).
+* ``scaled_rows`` (:data:`SCALE_FAMILIES`): every row of one level and its sides multiplied by
+  1e4..2e5 (targets near 1e5, ``large``), or a row of norm 1e-15..1e-13 with a target of order 1
+  added to level 0 (``tiny``): the answer must not depend on the units of a level's rows.
 * ``shared_yaw``, ``shared_joint``, ``singular``: controller problems on random BlueROV2 Heavy +
   Reach Alpha 5 states (:func:`controller_family`): station keeping with yaw above current
   alignment; a joint-limit margin above a posture task; the demo stack at a singular arm with
@@ -55,6 +58,8 @@ from .stacks import demo_stack
 #: Plain-matrix families, in the order of the issue's table.
 MATRIX_FAMILIES: tuple[str, ...] = ("well", "repeated", "zero_row", "near_singular",
                                     "ill_conditioned", "no_box_repeat")
+#: Plain-matrix families of rows in other units (not in the certified-families table).
+SCALE_FAMILIES: tuple[str, ...] = ("scaled_rows",)
 #: Controller families (BlueROV2 Heavy + Reach Alpha 5).
 CONTROLLER_FAMILIES: tuple[str, ...] = ("shared_yaw", "shared_joint", "singular")
 BOX_KINDS: tuple[str, ...] = ("wide", "tight", "saturated")
@@ -278,6 +283,21 @@ def _well(rng: np.random.Generator, n: int, box: str, variant: str) -> FamilyPro
     return FamilyProblem("well", variant, 0, n, levels, lower, upper, box=box)
 
 
+def _scaled_rows(rng: np.random.Generator, n: int, box: str, variant: str) -> FamilyProblem:
+    levels, lower, upper = base_problem(rng, n, box)
+    if variant == "large":
+        k = int(rng.integers(len(levels)))
+        A, lo, hi, w = levels[k]
+        s = 10.0 ** rng.uniform(4, 5.3, A.shape[0])
+        levels[k] = (A * s[:, None], lo * s, hi * s, w)
+    else:
+        a = _unit_rows(rng, 1, n)[0] * 10.0 ** rng.uniform(-15, -13)
+        t = rng.uniform(0.5, 2.0) * rng.choice([-1.0, 1.0])
+        lo_r, hi_r = (t, t) if rng.uniform() < 0.7 else (abs(t), np.inf)
+        levels[0] = _with_row(levels[0], a, lo_r, hi_r, rng)
+    return FamilyProblem("scaled_rows", variant, 0, n, levels, lower, upper, box=box)
+
+
 _MATRIX: dict[str, tuple[Callable[..., FamilyProblem], tuple[str, ...]]] = {
     "well": (_well, ("base",)),
     "repeated": (_repeated, ("same", "conflict")),
@@ -285,13 +305,15 @@ _MATRIX: dict[str, tuple[Callable[..., FamilyProblem], tuple[str, ...]]] = {
     "near_singular": (_near_singular, ("cond", "angle")),
     "ill_conditioned": (_ill_conditioned, ("cond", "spread")),
     "no_box_repeat": (_no_box_repeat, ("canonical", "partial", "none")),
+    "scaled_rows": (_scaled_rows, ("large", "tiny")),
 }
 
 
 def matrix_problem(family: str, seed: int) -> FamilyProblem:
     """One problem of a plain-matrix family, deterministic in ``(family, seed)``."""
     make, variants = _MATRIX[family]
-    rng = np.random.default_rng([seed, MATRIX_FAMILIES.index(family), 0xCE47])
+    rng = np.random.default_rng([seed, (MATRIX_FAMILIES + SCALE_FAMILIES).index(family),
+                                 0xCE47])
     variant = str(variants[seed % len(variants)])
     n = int(rng.integers(6, 31))
     box = str(BOX_KINDS[int(rng.integers(3))])
@@ -308,7 +330,7 @@ def family(name: str, count: int, seed: int = 0, models: dict[str, Any] | None =
     if name in CONTROLLER_FAMILIES:
         return [controller_problem(name, seed + i, models) for i in range(count)]
     raise KeyError(f"unknown family {name!r}; known: "
-                   f"{', '.join(MATRIX_FAMILIES + CONTROLLER_FAMILIES)}")
+                   f"{', '.join(MATRIX_FAMILIES + SCALE_FAMILIES + CONTROLLER_FAMILIES)}")
 
 
 # ---------------------------------------------------------------------------- controller

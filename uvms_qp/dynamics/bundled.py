@@ -203,37 +203,32 @@ def _arm_model() -> Model:
     return bluerov2_heavy_alpha5()
 
 
+def _carrying_the_arm(name: str, vehicle: BodyParameters, gravity: float, source: str
+                      ) -> PlantParameters:
+    """A bundled set: ``vehicle`` in fresh water, the Alpha-5-like arm, the Heavy's thrusters."""
+    rho = 1000.0
+    return PlantParameters(
+        name=name, vehicle=vehicle, links=alpha5_like_links(_arm_model(), rho),
+        water_density=rho, gravity=gravity, thrusters=ThrusterLayout.bluerov2_heavy(),
+        source=f"{source}; arm: {ALPHA5_LIKE}; thrusters: the Heavy's eight T200 at 16 V")
+
+
 @functools.cache
 def bluerov2_heavy_von_benzon_2022() -> PlantParameters:
     """BlueROV2 Heavy (von Benzon et al. 2022) carrying the Alpha-5-like arm."""
-    rho = 1000.0
-    return PlantParameters(
-        name="bluerov2_heavy_von_benzon_2022",
-        vehicle=von_benzon_2022_vehicle(),
-        links=alpha5_like_links(_arm_model(), rho),
-        water_density=rho,
-        gravity=9.82,
-        thrusters=ThrusterLayout.bluerov2_heavy(),
-        source=f"vehicle: {VON_BENZON_2022}; arm: {ALPHA5_LIKE}; thrusters: "
-               "the Heavy's eight T200 at 16 V",
-    )
+    return _carrying_the_arm("bluerov2_heavy_von_benzon_2022", von_benzon_2022_vehicle(), 9.82,
+                             f"vehicle: {VON_BENZON_2022}")
 
 
 @functools.cache
 def bluerov2_wu_2018() -> PlantParameters:
-    """Standard BlueROV2 (Wu 2018) carrying the Alpha-5-like arm (on the Heavy's mount)."""
-    rho = 1000.0
-    return PlantParameters(
-        name="bluerov2_wu_2018",
-        vehicle=wu_2018_vehicle(),
-        links=alpha5_like_links(_arm_model(), rho),
-        water_density=rho,
-        gravity=9.81,
-        thrusters=ThrusterLayout.bluerov2_heavy(),
-        source=f"vehicle: {WU_2018}; arm: {ALPHA5_LIKE}; thrusters: the Heavy's eight T200 "
-               "at 16 V (the standard vehicle's six would leave roll and pitch passive, which "
-               "the bundled model actuates)",
-    )
+    """Standard BlueROV2 (Wu 2018) carrying the Alpha-5-like arm (on the Heavy's mount).
+
+    It flies the Heavy's eight thrusters: the standard vehicle's six would leave roll and pitch
+    passive, which the bundled model actuates.
+    """
+    return _carrying_the_arm("bluerov2_wu_2018", wu_2018_vehicle(), 9.81,
+                             f"vehicle: {WU_2018} (with the Heavy's thrusters)")
 
 
 _SETS: dict[str, Callable[[], PlantParameters]] = {

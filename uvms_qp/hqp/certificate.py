@@ -80,15 +80,15 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from time import perf_counter
-from typing import NamedTuple
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 
 from .._validation import FloatArray
-from .backends.daqp_binding import DaqpBinding, open_daqp
 from .kkt import active_set
-from .linalg import nnls
+from .linalg import nnls, one_blas_thread
 from .problem import Problem
+from .tolerances import ACTIVE_TOL, FREEZE_TOL, HARD_TOL, LEVEL_TOL, OPT_TOL, STAT_TOL
 
 #: Verdicts of one level.
 MET = "met"
@@ -98,19 +98,6 @@ IMPROVABLE = "improvable"
 UNPROVEN = "unproven"
 LATE = "late"
 
-#: default relative tolerance deciding that a level is met (the registry's ``level_tol``)
-LEVEL_TOL = 1e-6
-#: default relative tolerance on the residual gap ``rho_k(x) - rho_k*`` of a certified level
-OPT_TOL = 1e-6
-#: freeze allowance of a higher level row, relative to ``max(1, |a_i x|)``
-FREEZE_TOL = 1e-9
-#: what a least-norm solve may leave of the residual on the variables without a box, relative to
-#: the level's gradient (round-off)
-STAT_TOL = 1e-9
-#: relative distance ``act_tol (1 + |a_i x|)`` within which a side counts as active
-ACT_TOL = 1e-7
-#: relative tolerance on the box and hard rows of an answer (``x`` must be inside)
-HARD_TOL = 1e-9
 #: DAQP's settings for the least-distance problems (H = I needs no proximal term)
 _LDP_SETTINGS = {"primal_tol": 1e-8, "eps_prox": 0.0, "iter_limit": 2000, "time_limit": 0.0}
 _LDP_RETRY = {**_LDP_SETTINGS, "primal_tol": 1e-6}
@@ -237,6 +224,37 @@ def _gap(df: float, rho: float) -> float:
     return rho - math.sqrt(room) if room > 0.0 else rho
 
 
+# ------------------------------------------------------------------- the least-distance solver
+class LeastDistance(Protocol):
+    """A least-distance QP workspace (``min 1/2 |d|^2 + f'd`` on two-sided rows and bounds).
+
+    Handed to :class:`Certifier` by its owner (a solver hands DAQP's binding,
+    :class:`~uvms_qp.hqp.backends.daqp_binding.NativeDaqp`); the certificate imports no solver.
+    ``setup`` keeps the arrays it is given and re-reads them on every ``solve_ldp``; ``lam``
+    holds the multipliers of the latest solve (> 0 at an upper side, < 0 at a lower one).
+    """
+
+    lam: FloatArray
+
+    def setup(self, H: FloatArray, f: FloatArray, A: FloatArray, bupper: FloatArray,
+              blower: FloatArray, sense: np.ndarray, break_points: np.ndarray
+              ) -> tuple[int, float]:
+        """Set the problem up on these arrays; a negative flag means it cannot be solved."""
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """The solver's settings (assign a dict to change some)."""
+
+    @settings.setter
+    def settings(self, new: dict[str, Any]) -> None: ...
+
+    def solve_ldp(self, rows: bool, warm: bool) -> int:
+        """Re-read ``f`` and the sides (and the rows) and solve; 1 when solved.
+
+        ``warm``: start from the working set of the latest solve.
+        """
+
+
 # ---------------------------------------------------------------------- the polar projection
 class _Polar:
     """DAQP's least-distance workspace of one level: the box and every row above the level.
@@ -255,7 +273,7 @@ class _Polar:
         work: The problem's :class:`_Work` (the level's rows of its buffers are used).
     """
 
-    def __init__(self, problem: Problem, k: int, binding: DaqpBinding, work: _Work) -> None:
+    def __init__(self, problem: Problem, k: int, binding: LeastDistance, work: _Work) -> None:
         n, head = problem.n, problem.head
         start, end = problem.spans[k]
         self.f = np.zeros(n)
@@ -408,6 +426,8 @@ class Certifier:
     the multipliers of its latest certified answer (tried first on the next answer).
 
     Args:
+        least_distance: Makes the least-distance workspace of each level (a solver passes
+            :func:`~uvms_qp.hqp.backends.daqp_binding.open_daqp`: DAQP's own problem class).
         level_tol: Relative tolerance deciding that a level is met.
         opt_tol: Relative tolerance on ``rho_k(x) - rho_k*`` of a certified level.
         freeze_tol: Freeze allowance of higher level rows, relative to ``max(1, |a_i x|)``.
@@ -418,19 +438,19 @@ class Certifier:
         hard_tol: Relative tolerance of the box and hard rows.
 
     Attributes:
-        open_binding: Makes the DAQP binding of each workspace (default
-            :func:`~uvms_qp.hqp.backends.daqp_binding.open_daqp`).
+        least_distance: As given (replace it to observe or fault the workspaces).
         end: Reading of ``clock`` [s] after which the levels not yet settled are left
             ``unproven`` (a solver sets it before each solve; ``inf``: none).
         clock: The clock of ``end``.
     """
 
-    def __init__(self, level_tol: float = LEVEL_TOL, opt_tol: float = OPT_TOL,
-                 freeze_tol: float = FREEZE_TOL, stat_tol: float = STAT_TOL,
-                 act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL) -> None:
+    def __init__(self, least_distance: Callable[[], LeastDistance], level_tol: float = LEVEL_TOL,
+                 opt_tol: float = OPT_TOL, freeze_tol: float = FREEZE_TOL,
+                 stat_tol: float = STAT_TOL, act_tol: float = ACTIVE_TOL,
+                 hard_tol: float = HARD_TOL) -> None:
+        self.least_distance = least_distance
         self.level_tol, self.opt_tol, self.freeze_tol = level_tol, opt_tol, freeze_tol
         self.stat_tol, self.act_tol, self.hard_tol = stat_tol, act_tol, hard_tol
-        self.open_binding: Callable[[], DaqpBinding] = open_daqp
         self.end = math.inf
         self.clock: Callable[[], float] = perf_counter
         self._works: dict[Problem, _Work] = {}
@@ -502,7 +522,7 @@ class Certifier:
         for k in unmet:
             polar = polars[k]
             if polar is None:
-                polar = polars[k] = _Polar(problem, k, self.open_binding(), work)
+                polar = polars[k] = _Polar(problem, k, self.least_distance(), work)
             size = polar.gradient()
             sizes.append(size)
             if polar.support:
@@ -530,7 +550,8 @@ class Certifier:
                     k = unmet[i]
                     out[k] = LevelCertificate(k, LATE, residuals[k], math.inf, math.inf)
                 return out
-            self._active(problem, work, s, residuals, unmet, rest, sizes, scales, out)
+            with one_blas_thread:
+                self._active(problem, work, s, residuals, unmet, rest, sizes, scales, out)
         return out
 
     def _active(self, problem: Problem, work: _Work, s: FloatArray, residuals: list[float],
@@ -687,19 +708,21 @@ def _verdict(df: float, freeze: float, loose: bool, rho: float, tol: float
 
 # ------------------------------------------------------------------------------- certify
 def certify(problem: Problem, x: FloatArray, s: FloatArray | None = None,
-            residuals: list[float] | None = None, *, level_tol: float = LEVEL_TOL,
+            residuals: list[float] | None = None, *,
+            least_distance: Callable[[], LeastDistance], level_tol: float = LEVEL_TOL,
             opt_tol: float = OPT_TOL, freeze_tol: float = FREEZE_TOL,
-            stat_tol: float = STAT_TOL, act_tol: float = ACT_TOL, hard_tol: float = HARD_TOL,
+            stat_tol: float = STAT_TOL, act_tol: float = ACTIVE_TOL, hard_tol: float = HARD_TOL,
             exact: bool = False, deadline: float | None = None) -> Certificate:
     """Prove each level of ``x`` optimal, or say why not (see the module docstring).
 
-    A one-off :class:`Certifier` (a solver keeps its own, with its DAQP workspaces).
+    A one-off :class:`Certifier` (a solver keeps its own, with its workspaces).
 
     Args:
         problem: The problem (its buffers are read, never written).
         x: The answer, shape (n,).
         s: ``slacks(problem, x)`` when the caller has them.
         residuals: The level residuals ``rho_k`` when the caller has them.
+        least_distance: Makes the least-distance workspaces (:class:`Certifier`).
         level_tol: Relative tolerance deciding that a level is met.
         opt_tol: Relative tolerance on ``rho_k(x) - rho_k*`` of a certified level.
         freeze_tol: Freeze allowance of higher level rows, relative to ``max(1, |a_i x|)``.
@@ -715,17 +738,18 @@ def certify(problem: Problem, x: FloatArray, s: FloatArray | None = None,
         The :class:`Certificate`; levels are judged against the frozen set at ``x`` whatever
         the verdicts above them.
     """
-    cert = Certifier(level_tol, opt_tol, freeze_tol, stat_tol, act_tol, hard_tol)(
-        problem, x, s, residuals)
+    cert = Certifier(least_distance, level_tol, opt_tol, freeze_tol, stat_tol, act_tol,
+                     hard_tol)(problem, x, s, residuals)
     if not exact or cert.ok or not cert.inside:
         return cert
     x = np.asarray(x, dtype=np.float64)
     levels = []
-    for c in cert.levels:
-        if not c.ok and c.verdict != ILL_POSED:
-            scale = problem.level_scale(c.level)
-            c = _settle(problem, x, c, opt_tol, scale, deadline)
-        levels.append(c)
+    with one_blas_thread:
+        for c in cert.levels:
+            if not c.ok and c.verdict != ILL_POSED:
+                scale = problem.level_scale(c.level)
+                c = _settle(problem, x, c, opt_tol, scale, deadline, least_distance)
+            levels.append(c)
     return Certificate(tuple(levels), cert.hard_violation, cert.inside)
 
 
@@ -832,7 +856,8 @@ def level_optimum(problem: Problem, x: FloatArray, k: int, deadline: float | Non
 
 
 def _settle(problem: Problem, x: FloatArray, c: LevelCertificate, opt_tol: float, scale: float,
-            deadline: float | None) -> LevelCertificate:
+            deadline: float | None, least_distance: Callable[[], LeastDistance]
+            ) -> LevelCertificate:
     """The exact verdict on level k: the optimum of its frozen set, compared with ``x``."""
     k, rho = c.level, c.residual
     better = level_optimum(problem, x, k, deadline)
@@ -842,7 +867,7 @@ def _settle(problem: Problem, x: FloatArray, c: LevelCertificate, opt_tol: float
     sub = _Frozen(problem, better)
     if not fr.keeps(sub, k):
         return c
-    inner = Certifier(level_tol=0.0, opt_tol=opt_tol)(problem, better)
+    inner = Certifier(least_distance, level_tol=0.0, opt_tol=opt_tol)(problem, better)
     if inner.levels[k].verdict not in (CERTIFIED, ILL_POSED, MET):
         return c
     diff = rho - sub.residual(k)
@@ -854,7 +879,7 @@ def _settle(problem: Problem, x: FloatArray, c: LevelCertificate, opt_tol: float
 
 # --------------------------------------------------------------------------------- repair
 def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = None, *,
-           certifier: Certifier | None = None, deadline: float | None = None,
+           certifier: Certifier, deadline: float | None = None,
            clock: Callable[[], float] = perf_counter) -> Repair:
     """Make a certified answer from ``x``: exact level solves from the first failing level down.
 
@@ -868,8 +893,7 @@ def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = No
         problem: The problem.
         x: The answer to repair, inside the hard set.
         certificate: The certificate of ``x`` when the caller has it.
-        certifier: The certificate to use (a solver's, with its workspaces and tolerances;
-            default a :class:`Certifier` with the default tolerances).
+        certifier: The certificate to use (a solver's, with its workspaces and tolerances).
         deadline: Reading of ``clock`` [s] after which the repair gives up.
         clock: The clock of ``deadline`` (default :func:`time.perf_counter`).
 
@@ -877,8 +901,15 @@ def repair(problem: Problem, x: FloatArray, certificate: Certificate | None = No
         The :class:`Repair`: ``repaired`` True with a certified ``x``, or the input ``x`` with
         its certificate and a message saying why it could not be repaired.
     """
-    x = np.asarray(x, dtype=np.float64)
-    certifier = certifier or Certifier()
+    with one_blas_thread:
+        return _repair(problem, np.asarray(x, dtype=np.float64), certificate,
+                       certifier, deadline, clock)
+
+
+def _repair(problem: Problem, x: FloatArray, certificate: Certificate | None,
+            certifier: Certifier, deadline: float | None, clock: Callable[[], float]
+            ) -> Repair:
+    """:func:`repair` on one BLAS thread."""
     level_tol = certifier.level_tol
     cert = certificate or certifier(problem, x)
     if cert.ok:

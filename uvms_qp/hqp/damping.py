@@ -79,7 +79,9 @@ import numpy as np
 from scipy.linalg import lapack
 
 from .._validation import FloatArray
+from .linalg import one_blas_thread
 from .problem import Problem
+from .tolerances import ACTIVE_TOL, RANK_ATOL, RANK_RTOL
 
 _GESDD = lapack.dgesdd
 _POTRF = lapack.dpotrf
@@ -98,12 +100,6 @@ DEFAULT_THRESHOLD = 0.05
 #: The screen's floor on a block's smallest singular value (unit rows): below it, the block may
 #: be rank deficient and the levels are examined one by one.
 SCREEN_RANK = 1e-6
-#: Singular values at or below ``RANK_RTOL * sigma_max`` (and ``RANK_ATOL``) count as zero.
-RANK_RTOL = 1e-12
-RANK_ATOL = 1e-15
-#: A row counts as active when it is within ``ACTIVE_RTOL * max(1, max |A x|)`` of a side (the
-#: level rows; hard rows: ``ACTIVE_RTOL`` times the problem's hard scale).
-ACTIVE_RTOL = 1e-7
 
 
 @dataclass(frozen=True)
@@ -180,7 +176,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     z = setup.A.dot(x)
     B = setup.B  # [z - lo; z - hi]
     _subtract(z, setup.sides, out=B)
-    tol = ACTIVE_RTOL * max(1.0, float(_max(_absolute(z, out=z), initial=0.0)))
+    tol = ACTIVE_TOL * max(1.0, float(_max(_absolute(z, out=z), initial=0.0)))
     # active: at or beyond a side (an equality row always; an infinite side never)
     active = _less_equal(setup.below, tol, out=setup.active)
     _logical_or(active, _greater_equal(setup.above, -tol, out=setup.scratch), out=active)
@@ -199,7 +195,8 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     slack = _add(_minimum(setup.below, 0.0), _maximum(setup.above, 0.0))
     if clock() > end:
         return None
-    return _examine(problem, setup, x, active, slack, hard, y_norm, end, clock)
+    with one_blas_thread:
+        return _examine(problem, setup, x, active, slack, hard, y_norm, end, clock)
 
 
 def _examine(problem: Problem, setup: _Setup, x: FloatArray, active: np.ndarray,
@@ -499,7 +496,7 @@ def _active_hard(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArra
     n, head = problem.n, problem.head
     H, lo, hi = problem.A[n:head], problem.lo[n:head], problem.hi[n:head]
     z = H @ x
-    tol = ACTIVE_RTOL * problem.hard_scale
+    tol = ACTIVE_TOL * problem.hard_scale
     rows = _unit(H[(lo == hi) | (z - lo <= tol) | (hi - z <= tol)], root)
     return np.asarray(rows[np.einsum("ij,ij->i", rows, rows) > 0.0], dtype=np.float64)
 

@@ -24,12 +24,9 @@ import numpy as np
 
 from .._validation import FloatArray
 from .problem import Problem
+from .tolerances import DEPENDENT_TOL, ZERO_ROW_TOL
 
-#: relative distance to the span of the equality rows above, below which a row is dependent
-RTOL = 1e-9
-#: norm relative to the largest row norm below which a row counts as zero (a row of norm 1e-8
-#: with a target of 1 needs |x| ~ 1e8 to move its violation: a constant inside any box)
-ZTOL = 1e-7
+RTOL, ZTOL = DEPENDENT_TOL, ZERO_ROW_TOL  # (:mod:`uvms_qp.hqp.tolerances`)
 
 
 def dependent_rows(A: FloatArray, lo: FloatArray, hi: FloatArray, n: int, mh: int,

@@ -8,8 +8,10 @@ not a proof. For one level's QP
 a point ``z`` is optimal exactly when it is feasible and there are multipliers ``nu >= 0`` on
 the constraints tight at ``z`` with ``P z + q + C_J' nu = 0`` (``C_J`` the tight rows of ``G``,
 ``+I`` for tight upper and ``-I`` for tight lower bounds): the Karush-Kuhn-Tucker conditions of
-a convex QP, necessary and sufficient. :func:`certify` finds the best such ``nu`` by non-negative
-least squares and accepts ``z`` only when the stationarity residual is at round-off level;
+a convex QP, necessary and sufficient. :func:`certify_qp` finds the best such ``nu`` by
+non-negative least squares and accepts ``z`` only when the stationarity residual is at round-off
+level (a :class:`QpCertificate`: one QP's optimum; the lexicographic optimum of a whole problem
+has its own certificate, level by level, in :mod:`uvms_qp.hqp.certificate`);
 :func:`certified_point` first sharpens the back-end's answer on candidate active sets (an
 equality-constrained QP solved through its KKT system) so that a nearly right answer becomes an
 exactly right one, then certifies it. A point that cannot be certified is reported as a failed
@@ -27,20 +29,15 @@ import numpy as np
 
 from .._validation import FloatArray
 from .linalg import nnls
+from .tolerances import FEAS_TOL, ROUND_OFF, STAT_TOL, TIGHT_TOL
 
-#: relative feasibility tolerance of a certified point, ``G z - h <= FEAS_TOL (1 + |h|)``
-FEAS_TOL = 1e-10
-#: relative slack below which a constraint counts as tight (may carry a multiplier)
-TIGHT_TOL = 1e-9
-#: stationarity residual allowed, relative to ``max(1, |P z|, |q|, |C_J' nu|)``
-STAT_TOL = 1e-9
 #: relative activity thresholds tried when sharpening an inexact answer
 ACTIVE_TOLS = (1e-9, 1e-7, 1e-6, 1e-5, 1e-4)
 
 
 @dataclass(frozen=True)
-class Certificate:
-    """A certified optimum of one QP.
+class QpCertificate:
+    """A certified optimum of one QP (the KKT conditions hold at ``z``).
 
     Attributes:
         z: The optimal point.
@@ -72,8 +69,8 @@ def feasible(G: FloatArray | None, h: FloatArray | None, lb: FloatArray | None,
     return not (ub is not None and np.any(z > ub + tol * (1.0 + _finite_abs(ub))))
 
 
-def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
-            lb: FloatArray | None, ub: FloatArray | None, z: FloatArray) -> Certificate | None:
+def certify_qp(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
+            lb: FloatArray | None, ub: FloatArray | None, z: FloatArray) -> QpCertificate | None:
     """Check the KKT conditions of the QP at ``z``; return the certificate or None.
 
     Multipliers are searched only on constraints tight at ``z`` (complementary slackness) and
@@ -103,8 +100,11 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
         reach = float(np.abs(C.T @ nu).max())
     else:
         nu, r, reach = np.zeros(0), g, 0.0
-    scale = max(1.0, float(np.abs(P @ z).max(initial=0.0)), float(np.abs(q).max(initial=0.0)),
-                reach)
+    # relative to the gradient's own terms (no floor at 1: a QP in other units is judged
+    # alike), and never below what round-off leaves of ``P z`` (``ROUND_OFF |P| |z|``)
+    scale = max(ROUND_OFF * float(np.abs(P).max(initial=0.0)) * float(np.abs(z).max(
+        initial=0.0)), float(np.abs(P @ z).max(initial=0.0)), float(np.abs(q).max(initial=0.0)),
+                reach) or 1.0
     stat = float(np.abs(r).max(initial=0.0)) / scale
     if not np.isfinite(stat) or stat > STAT_TOL:
         return None
@@ -115,7 +115,7 @@ def certify(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | 
     ku = int(tight_u.sum())
     lam_box[tight_u] = nu[k:k + ku]
     lam_box[tight_l] -= nu[k + ku:]
-    return Certificate(z, lam, lam_box, stat)
+    return QpCertificate(z, lam, lam_box, stat)
 
 
 def kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray, rcond: float = 1e-13
@@ -137,20 +137,20 @@ def kkt_point(P: FloatArray, q: FloatArray, C: FloatArray, d: FloatArray, rcond:
 def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
                     lb: FloatArray | None, ub: FloatArray | None, z: FloatArray,
                     tols: tuple[float, ...] = ACTIVE_TOLS, *, deadline: float | None = None,
-                    clock: Callable[[], float] = perf_counter) -> Certificate | None:
+                    clock: Callable[[], float] = perf_counter) -> QpCertificate | None:
     """Sharpen an inexact answer on candidate active sets and certify it.
 
     For each activity threshold ``tau`` the constraints within ``tau`` (relative) of being
     active at ``z`` are imposed as equalities and the equality-constrained QP is solved; a
     constraint whose multiplier comes out negative is released and the QP solved again (one
     primal active-set step, up to 5 times). The first feasible candidate that passes
-    :func:`certify` is returned; the raw ``z`` itself is tried first.
+    :func:`certify_qp` is returned; the raw ``z`` itself is tried first.
 
     Returns:
         The certificate of the sharpened optimum, or None when no candidate can be certified
         (or ``deadline``, a reading of ``clock`` [s], passes first).
     """
-    cert = certify(P, q, G, h, lb, ub, z)
+    cert = certify_qp(P, q, G, h, lb, ub, z)
     if cert is not None:
         return cert
     n = z.size
@@ -178,7 +178,7 @@ def certified_point(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
             if not np.all(np.isfinite(zp)):
                 break
             if feasible(G, h, lb, ub, zp):
-                cert = certify(P, q, G, h, lb, ub, zp)
+                cert = certify_qp(P, q, G, h, lb, ub, zp)
                 if cert is not None:
                     return cert
             neg = mu < -STAT_TOL * max(1.0, float(np.abs(mu).max(initial=0.0)))
@@ -361,13 +361,13 @@ def _blocking(G: FloatArray, h: FloatArray, z: FloatArray, p: FloatArray, work: 
 def active_set_from(P: FloatArray, q: FloatArray, G: FloatArray | None, h: FloatArray | None,
                     lb: FloatArray | None, ub: FloatArray | None, z0: FloatArray,
                     max_iter: int = 200, deadline: float | None = None,
-                    clock: Callable[[], float] = perf_counter) -> Certificate | None:
+                    clock: Callable[[], float] = perf_counter) -> QpCertificate | None:
     """Exact solve of the QP from a feasible point (:func:`active_set`), then certified.
 
     The recovery when a back-end gives up (e.g. calls a 1e-10-thin feasible set infeasible):
     :func:`active_set` started from a point known to be feasible, for a cascade the previous
     level's answer (``y = 0``) with the smallest slacks of the level's own rows; the bounds
-    become rows of ``G``. The answer is returned only when :func:`certify` proves it optimal.
+    become rows of ``G``. The answer is returned only when :func:`certify_qp` proves it optimal.
 
     Args:
         P: Hessian, shape (k, k), positive semi-definite.
@@ -396,4 +396,4 @@ def active_set_from(P: FloatArray, q: FloatArray, G: FloatArray | None, h: Float
     rows, rhs = rows[live], rhs[live]
     z = active_set(P, q, np.zeros((0, n)), np.zeros(0), rows, rhs, z0, max_iter=max_iter,
                    start_tol=FEAS_TOL, deadline=deadline, clock=clock)
-    return None if z is None else certify(P, q, G, h, lb, ub, z)
+    return None if z is None else certify_qp(P, q, G, h, lb, ub, z)

@@ -14,6 +14,7 @@ counts aborts.
 from __future__ import annotations
 
 import math
+import threading
 from typing import Any
 
 import numpy as np
@@ -56,12 +57,16 @@ class OneBlasThread:
     the same problem). The user's other code keeps its own setting: the limit holds only inside
     the context. The libraries are found once by ``threadpoolctl`` (on first entry, once numpy
     and SciPy have loaded theirs); an entry then costs two C calls per library (a few
-    microseconds). Re-entering is free: the inner context finds one thread already.
+    microseconds). Re-entering from the same thread costs a counter, so every entry point of
+    the solve path (the solvers, the certificate's cold solves, the repair, the damping
+    screen's examination) enters it without paying twice. Each thread counts its own entries
+    and sets and restores the count itself (OpenBLAS does not always let one thread's setting
+    reach another's calls).
     """
 
     def __init__(self) -> None:
         self._libs: list[Any] | None = None
-        self._saved: list[list[tuple[Any, int]]] = []
+        self._local = threading.local()  # per thread: depth and the counts to restore
 
     def _find(self) -> list[Any]:
         from threadpoolctl import ThreadpoolController
@@ -71,18 +76,27 @@ class OneBlasThread:
         return libs
 
     def __enter__(self) -> OneBlasThread:
-        saved = []
+        local = self._local
+        depth = getattr(local, "depth", 0)
+        local.depth = depth + 1
+        if depth:  # inside an outer context of this thread: one thread already
+            return self
+        saved = local.saved = []
         for lib in self._libs if self._libs is not None else self._find():
             count = lib.get_num_threads()
             if count is not None and count != 1:
                 lib.set_num_threads(1)
                 saved.append((lib, count))
-        self._saved.append(saved)
         return self
 
     def __exit__(self, *_: object) -> None:
-        for lib, count in self._saved.pop():
+        local = self._local
+        local.depth -= 1
+        if local.depth:
+            return
+        for lib, count in local.saved:
             lib.set_num_threads(count)
+        local.saved = []
 
 
 #: The one limiter of the solve path (entered by every solve and every control step).

@@ -35,6 +35,7 @@ import numpy as np
 from .._validation import FloatArray
 from .problem import Problem
 from .result import OK_STATUSES, HierarchyResult, Status
+from .tolerances import HARD_TOL, LEVEL_TOL
 
 if TYPE_CHECKING:  # pragma: no cover - the certificate is handed in by the solver
     from .certificate import Certificate
@@ -131,8 +132,8 @@ def placeholder(problem: Problem) -> FloatArray:
 
 
 def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str = "",
-             info: dict[str, object] | None = None, level_tol: float = 1e-6,
-             hard_tol: float = 1e-9, solve_time: float = 0.0, measured: Measured | None = None,
+             info: dict[str, object] | None = None, level_tol: float = LEVEL_TOL,
+             hard_tol: float = HARD_TOL, solve_time: float = 0.0, measured: Measured | None = None,
              certify: Certify | None = None) -> HierarchyResult:
     """Measure ``x`` against ``problem`` and decide its status (see the module docstring).
 

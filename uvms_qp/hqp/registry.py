@@ -13,6 +13,7 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import UnknownSolverError
+from .tolerances import HARD_TOL, LEVEL_TOL
 
 
 @dataclass(frozen=True)
@@ -59,8 +60,8 @@ class SolverSpec:
     bounds: bool = True
     exact: bool = True
     agreement_tol: float = 1e-8
-    level_tol: float = 1e-6
-    hard_tol: float = 1e-9
+    level_tol: float = LEVEL_TOL
+    hard_tol: float = HARD_TOL
     freeze_margin: float = 1e-9
     settings: MappingProxyType[str, Any] = field(default_factory=lambda: MappingProxyType({}))
     sparse: bool = False

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._validation import FloatArray
+from .tolerances import TIGHT_TOL
 
 if TYPE_CHECKING:  # pragma: no cover - the certificate module sits above the result
     from .certificate import Certificate
@@ -70,8 +71,6 @@ _VERDICTS = {"met": "met", "certified": "NOT met, proven optimal",
 OK_STATUSES = (Status.OPTIMAL,)
 #: Old status names and the status each now reads as (``Status(old)`` applies it).
 RENAMED = {"level_infeasible": "optimal"}
-
-_ACTIVE_TOL = 1e-9
 
 
 class HierarchyResult:
@@ -178,8 +177,8 @@ class HierarchyResult:
         if self._active is None:
             lo, hi = self.box
             x = self.x
-            tol_lo = _ACTIVE_TOL * (1.0 + np.abs(np.where(np.isfinite(lo), lo, 0.0)))
-            tol_hi = _ACTIVE_TOL * (1.0 + np.abs(np.where(np.isfinite(hi), hi, 0.0)))
+            tol_lo = TIGHT_TOL * (1.0 + np.abs(np.where(np.isfinite(lo), lo, 0.0)))
+            tol_hi = TIGHT_TOL * (1.0 + np.abs(np.where(np.isfinite(hi), hi, 0.0)))
             self._active = (x - lo <= tol_lo, hi - x <= tol_hi)
         return self._active
 

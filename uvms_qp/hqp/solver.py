@@ -23,6 +23,7 @@ from ..errors import InputError
 from .backends import Backend
 from .backends.cascade import CascadeBackend
 from .backends.daqp import DaqpBackend
+from .backends.daqp_binding import open_daqp
 from .backends.nullspace import NullspaceBackend
 from .certificate import Certifier, repair
 from .linalg import one_blas_thread
@@ -99,7 +100,7 @@ class HierarchySolver:
         self.deadline = math.inf if deadline is None else as_scalar(
             deadline, "deadline", positive=True, allow_inf=True)
         self._name = self.spec.name
-        self.certifier = Certifier(level_tol=self.level_tol, hard_tol=self.hard_tol)
+        self.certifier = Certifier(open_daqp, level_tol=self.level_tol, hard_tol=self.hard_tol)
         self.certify: Certify | None = self.certifier
         self.repair = self.spec.bounds
         self._clock: Callable[[], float] = perf_counter

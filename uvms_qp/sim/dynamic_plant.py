@@ -41,7 +41,7 @@ from ..dynamics import (
 from ..errors import InputError, PlantDataError
 from ..model.vehicle import NU_NAMES
 from .plant_config import PlantSpec
-from .plants import RateFunction
+from .plants import RateFunction, RunState
 
 #: A control period must hold a whole number of servo periods, and a servo period a whole number
 #: of physics steps, to this relative tolerance.
@@ -157,7 +157,7 @@ class DynamicSeries:
     payload_time: float | None = None
 
 
-class DynamicPlant:
+class DynamicPlant(RunState):
     """A floating UVMS tracking the controller's velocity references (module docstring).
 
     Args:
@@ -211,7 +211,7 @@ class DynamicPlant:
         self._actuated = [NU_NAMES.index(d) for d in model.actuated]
         self._n_vehicle = int(model.n_vehicle)
         self._rate_limit = np.asarray(model.joint_rate_limit, dtype=np.float64)
-        self._q: FloatArray | None = None
+        super().__init__()
         self._v = np.zeros(6 + int(model.n_joints))
         self._records: dict[str, list[Any]] = {}
         self._unmet = np.zeros(6)
@@ -238,13 +238,6 @@ class DynamicPlant:
             "time", "thrust", "thrust_command", "saturated", "power", "energy",
             "wrench_demand", "wrench_unmet", "body_velocity", "velocity_reference",
             "joint_rates", "joint_reference", "joint_torque")}
-
-    @property
-    def q(self) -> FloatArray:
-        """The true configuration."""
-        if self._q is None:
-            raise RuntimeError("the plant has not been started")
-        return self._q
 
     @property
     def body_velocity(self) -> FloatArray:

@@ -51,26 +51,33 @@ class Plant(Protocol):
         """What the plant recorded over the first ``steps`` control periods (None: nothing)."""
 
 
-class KinematicPlant:
+class RunState:
+    """The true configuration a plant keeps between ``start`` and the end of a run."""
+
+    def __init__(self) -> None:
+        self._q: FloatArray | None = None
+
+    @property
+    def q(self) -> FloatArray:
+        """The true configuration (nq,)."""
+        if self._q is None:
+            raise RuntimeError("the plant has not been started")
+        return self._q
+
+
+class KinematicPlant(RunState):
     """The command realised exactly, integrated by ``integrator`` over ``dt`` [s]."""
 
     kind = "kinematic"
 
     def __init__(self, integrator: Integrator, dt: float) -> None:
+        super().__init__()
         self.integrator = integrator
         self.dt = dt
-        self._q: FloatArray | None = None
 
     def start(self, q0: FloatArray) -> None:
         """Begin a run at ``q0``."""
         self._q = q0
-
-    @property
-    def q(self) -> FloatArray:
-        """The configuration reached."""
-        if self._q is None:
-            raise RuntimeError("the plant has not been started")
-        return self._q
 
     @property
     def body_velocity(self) -> FloatArray | None:

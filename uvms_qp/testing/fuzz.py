@@ -36,11 +36,14 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..hqp import HierarchySolver, Problem, available_solvers
+from ..hqp.backends.daqp_binding import open_daqp
 from ..hqp.certificate import Certifier, repair
 from ..hqp.damping import level_damping
 
 #: What a case runs, in order.
 PARTS = ("solve", "certify", "repair", "damping")
+#: Seconds each part of a case may take (its deadline) [s].
+BUDGET = 2.0
 
 
 @dataclass
@@ -157,42 +160,57 @@ def _problem(case: Case) -> Problem:
     return problem
 
 
-def run_case(case: Case, solvers: dict[str, Any]) -> dict[str, str]:
-    """Every part of :data:`PARTS` on one case; the outcome of each (``ok`` or what it raised).
+def run_case(case: Case, solvers: dict[str, Any], budget: float = BUDGET
+             ) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
+    """Every part of :data:`PARTS` on one case, each with ``budget`` seconds.
 
-    A part that raises is reported by exception type (a typed error is an answer; anything
-    else is a finding, but not a crash).
+    Returns:
+        The outcome of each part (``ok``, a status, or what it raised: a typed error is an
+        answer; anything else is a finding, but not a crash) and its times ``(wall, CPU)``
+        [s] (:func:`time.perf_counter`, :func:`time.thread_time`: a part whose wall time
+        far exceeds its CPU time waited for a core).
     """
     problem = _problem(case)
     out: dict[str, str] = {}
+    times: dict[str, tuple[float, float]] = {}
     x = case.x
+    clock, cpu = time.perf_counter, time.thread_time
+    began, used = clock(), cpu()
     try:
         solver = solvers.get(case.solver)
         if solver is None:
             solver = solvers[case.solver] = HierarchySolver(case.solver)
-        result = solver.solve_problem(problem)
+        result = solver.solve_problem(problem, began + budget)
         x = result.x if result.hard_violation == 0.0 else x
         out["solve"] = str(result.status.value)
     except Exception as exc:
         out["solve"] = "raised " + type(exc).__name__
-    certifier = Certifier()
+    times["solve"] = (clock() - began, cpu() - used)
+    certifier = Certifier(open_daqp)
+    began, used = clock(), cpu()
+    certifier.end = began + budget
     try:
         cert = certifier(problem, x)
         out["certify"] = "ok"
     except Exception as exc:
         cert = None
         out["certify"] = "raised " + type(exc).__name__
+    times["certify"] = (clock() - began, cpu() - used)
+    began, used = clock(), cpu()
     try:
-        repair(problem, x, cert, certifier=certifier, deadline=time.perf_counter() + 2.0)
+        repair(problem, x, cert, certifier=certifier, deadline=began + budget)
         out["repair"] = "ok"
     except Exception as exc:
         out["repair"] = "raised " + type(exc).__name__
+    times["repair"] = (clock() - began, cpu() - used)
+    began, used = clock(), cpu()
     try:
-        level_damping(problem, x, (0.05,) * len(case.sizes), 0.05)
+        level_damping(problem, x, (0.05,) * len(case.sizes), 0.05, end=began + budget)
         out["damping"] = "ok"
     except Exception as exc:
         out["damping"] = "raised " + type(exc).__name__
-    return out
+    times["damping"] = (clock() - began, cpu() - used)
+    return out, times
 
 
 def worker(first: int, last: int) -> None:
@@ -204,8 +222,8 @@ def worker(first: int, last: int) -> None:
     for seed in range(first, last):
         sys.stdout.write(f"start {seed}\n")
         sys.stdout.flush()
-        out = run_case(draw(seed), solvers)
-        sys.stdout.write("done " + json.dumps([seed, out]) + "\n")
+        out, times = run_case(draw(seed), solvers)
+        sys.stdout.write("done " + json.dumps([seed, out, times]) + "\n")
         sys.stdout.flush()
 
 
@@ -219,9 +237,15 @@ class Report:
     outcomes: Counter[str] = field(default_factory=Counter)
     raised: list[tuple[int, str, str]] = field(default_factory=list)  # (seed, part, what)
     seconds: float = 0.0
+    #: the slowest parts seen: (wall [s], CPU [s], seed, part), slowest first
+    slowest: list[tuple[float, float, int, str]] = field(default_factory=list)
+    #: parts that ran past their budget by more than ``late_by`` of wall time:
+    #: (seed, part, wall [s], CPU [s])
+    late: list[tuple[int, str, float, float]] = field(default_factory=list)
 
 
-def run(first: int, count: int, timeout: float = 30.0, progress: bool = False) -> Report:
+def run(first: int, count: int, timeout: float = 30.0, progress: bool = False,
+        late_by: float = 0.5) -> Report:
     """Run ``count`` cases from seed ``first``, each worker in a child process (see above).
 
     Args:
@@ -229,6 +253,8 @@ def run(first: int, count: int, timeout: float = 30.0, progress: bool = False) -
         count: Number of cases.
         timeout: Seconds a case may run before its worker is killed (a hang).
         progress: Print a line every 1000 cases.
+        late_by: Wall time past its budget (:data:`BUDGET`) after which a part is reported
+            ``late`` [s].
     """
     report = Report()
     start = time.perf_counter()
@@ -263,7 +289,13 @@ def run(first: int, count: int, timeout: float = 30.0, progress: bool = False) -
             if word == "start":
                 current = int(rest)
             elif word == "done":
-                done, out = json.loads(rest)
+                done, out, times = json.loads(rest)
+                for part, (wall, used) in times.items():
+                    report.slowest.append((wall, used, done, part))
+                    if wall > BUDGET + late_by:
+                        report.late.append((done, part, wall, used))
+                if len(report.slowest) > 100:
+                    report.slowest = sorted(report.slowest, reverse=True)[:10]
                 current = None
                 seed = done + 1
                 report.cases += 1
@@ -277,6 +309,7 @@ def run(first: int, count: int, timeout: float = 30.0, progress: bool = False) -
                           flush=True)
         proc.stdout.close()
     report.seconds = time.perf_counter() - start
+    report.slowest = sorted(report.slowest, reverse=True)[:10]
     return report
 
 
@@ -289,7 +322,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     report = run(args.first, args.cases, args.timeout, progress=True)
     print(f"{report.cases} cases in {report.seconds:.0f} s: {len(report.aborts)} aborts "
-          f"{report.aborts[:20]}, {len(report.hangs)} hangs {report.hangs[:20]}")
+          f"{report.aborts[:20]}, {len(report.hangs)} hangs {report.hangs[:20]}, "
+          f"{len(report.late)} parts past their {BUDGET:g} s budget {report.late[:20]}")
+    for wall, used, seed, part in report.slowest:
+        print(f"  slowest: seed {seed} {part} {wall:.3f} s wall, {used:.3f} s CPU")
     for key, value in sorted(report.outcomes.items()):
         print(f"  {key}: {value}")
     for seed, part, what in report.raised[:30]:

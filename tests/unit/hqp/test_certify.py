@@ -1,4 +1,4 @@
-"""KKT certificates and the exact active-set rescue of the cascades (uvms_qp.hqp.backends.certify).
+"""One QP's KKT certificate and the exact active-set rescue of the cascades (uvms_qp.hqp.kkt).
 
 Hand-checkable QPs: the projection ``min 0.5 |z - c|^2  s.t.  z <= u`` has the optimum
 ``z* = min(c, u)`` with multipliers ``max(c - u, 0)``; a recorded 1e-8-thin slab (a level QP on
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from uvms_qp.hqp import HierarchySolver
-from uvms_qp.hqp.kkt import active_set_from, certified_point, certify
+from uvms_qp.hqp.kkt import active_set_from, certified_point, certify_qp
 
 
 def projection_qp(rng, n=6):
@@ -24,11 +24,11 @@ def test_certify_accepts_the_optimum_with_its_multipliers():
     for _ in range(20):
         P, q, G, h, c, u = projection_qp(rng)
         z = np.minimum(c, u)
-        cert = certify(P, q, G, h, None, None, z)
+        cert = certify_qp(P, q, G, h, None, None, z)
         assert cert is not None
         assert cert.lam == pytest.approx(np.maximum(c - u, 0.0), abs=1e-12)
         # the same constraints as bounds: upper multipliers are positive
-        cert_b = certify(P, q, None, None, None, u, z)
+        cert_b = certify_qp(P, q, None, None, None, u, z)
         assert cert_b is not None
         assert cert_b.lam_box == pytest.approx(np.maximum(c - u, 0.0), abs=1e-12)
 
@@ -38,10 +38,10 @@ def test_certify_rejects_infeasible_and_suboptimal_points():
     for _ in range(20):
         P, q, G, h, c, u = projection_qp(rng)
         z = np.minimum(c, u)
-        assert certify(P, q, G, h, None, None, z + 1e-6) is None  # breaks the active rows
+        assert certify_qp(P, q, G, h, None, None, z + 1e-6) is None  # breaks the active rows
         inner = z.copy()
         inner[np.argmax(u - z)] -= 1e-6  # feasible, 1e-6 away from the optimum
-        assert certify(P, q, G, h, None, None, inner) is None
+        assert certify_qp(P, q, G, h, None, None, inner) is None
 
 
 def test_certified_point_sharpens_an_inexact_answer():

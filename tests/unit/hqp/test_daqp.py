@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import daqp
@@ -18,19 +19,12 @@ import numpy as np
 import pytest
 
 from tests.regressions.corpus import load_problem
+from tests.support.daqp_model import ModelDaqp
 from tests.unit.hqp.test_lexicographic import ill_posed, random_mixed_inputs
 from uvms_qp.hqp import HierarchySolver, Problem, Rows, normalize_problem
 from uvms_qp.hqp.backends.daqp import _Setup
-from uvms_qp.hqp.backends.daqp_binding import (
-    SUPPORTED_VERSIONS,
-    ModelDaqp,
-    NativeDaqp,
-    native_available,
-    open_daqp,
-)
+from uvms_qp.hqp.backends.daqp_binding import SUPPORTED_VERSIONS, NativeDaqp, open_daqp
 
-native_only = pytest.mark.skipif(not native_available(),
-                                 reason=f"daqp version not in {SUPPORTED_VERSIONS}")
 RHO_LADDER = Path(__file__).parents[2] / "regressions" / "demo_daqp_rho_ladder.npz"
 
 
@@ -60,12 +54,20 @@ def _pair(problem, rho_soft=1e-8):
 
 
 # ------------------------------------------------------------------------------- binding
-@native_only
-def test_the_native_binding_is_the_default():
+def test_the_native_binding_is_the_one_binding():
     assert isinstance(open_daqp(), NativeDaqp)
 
 
-@native_only
+def test_a_daqp_whose_structures_are_not_mirrored_is_refused(monkeypatch):
+    import uvms_qp.hqp.backends.daqp_binding as binding
+
+    monkeypatch.setattr(binding, "_daqp_version", lambda: "0.0.1")
+    with pytest.raises(ImportError, match=re.escape(f"daqp=={SUPPORTED_VERSIONS[-1]}")):
+        binding.NativeDaqp()
+    with pytest.raises(ImportError, match=re.escape("0.0.1")):
+        HierarchySolver("daqp")
+
+
 @pytest.mark.parametrize("seed", range(12))
 def test_warm_started_sequence_is_bit_identical(seed):
     rng = np.random.default_rng(seed)
@@ -90,7 +92,6 @@ def test_warm_started_sequence_is_bit_identical(seed):
         assert f1 == f2 and i1 == i2 and np.array_equal(x1, x2)
 
 
-@native_only
 def test_cold_start_settings_and_new_structure():
     rng = np.random.default_rng(5)
     problem = _hierarchy(rng, 6, (3, 2), 0.4)
@@ -111,7 +112,6 @@ def test_cold_start_settings_and_new_structure():
     assert native.solve() == model.solve() and np.array_equal(native.x, model.x)
 
 
-@native_only
 def test_failed_setup_keeps_a_usable_object():
     rng = np.random.default_rng(9)
     H, f, A, bu, bl, sense, bp = _hierarchy(rng, 4, (2,), 1.0)
@@ -127,7 +127,6 @@ def test_failed_setup_keeps_a_usable_object():
     assert native.solve() in (1, 2) and np.all(np.isfinite(native.x))
 
 
-@native_only
 def test_soft_weights_set_or_written_in_place_match_daqp_model():
     rng = np.random.default_rng(17)
     problem = _hierarchy(rng, 6, (3, 3), 0.4)
@@ -270,8 +269,8 @@ def test_rho_soft_ladder_solves_a_recorded_early_stop():
     assert again.ok and again.info["rho_soft"] == result.info["rho_soft"]
 
 
-def test_daqp_model_fallback_gives_the_same_answers():
-    """Where the direct C calls are unavailable, daqp.Model serves: same answers, same ladder."""
+def test_daqp_model_oracle_gives_the_same_answers():
+    """The back-end on the daqp.Model oracle: same answers, same ladder as on the C binding."""
     problem, _ = load_problem(RHO_LADDER)
     native = HierarchySolver("daqp").solve_problem(problem)
     fallback = HierarchySolver("daqp")

@@ -20,6 +20,7 @@ from uvms_qp.testing import fuzz
 ZERO_ROW_ABOVE = """
 import numpy as np
 from uvms_qp.hqp import Problem, solve_hierarchy
+from uvms_qp.hqp.backends.daqp_binding import open_daqp
 from uvms_qp.hqp.certificate import Certifier
 p = Problem(2, 0, [1, 1])
 p.A[2:] = 0.0
@@ -27,7 +28,7 @@ p.A[3, 0] = 1.0
 p.lo[:2], p.hi[:2] = -np.inf, np.inf
 p.lo[2] = p.hi[2] = 1.0
 p.lo[3] = p.hi[3] = -1.0
-print(Certifier()(p, np.array([0.0, 0.0])).levels[1].verdict)
+print(Certifier(open_daqp)(p, np.array([0.0, 0.0])).levels[1].verdict)
 zero = np.zeros((1, 2))
 r = solve_hierarchy([[(zero, [1.0])], [(zero, [0.0]), (np.array([[1.0, 0.0]]), [-1.0])]],
                     solver=SOLVER)

@@ -24,13 +24,17 @@ removes the bias at once); inexact back-ends' answers are sharpened and certifie
 
 Degenerate data, by design:
 
+* each level's objective is divided by its Hessian's largest diagonal entry (the same minimiser),
+  so that a level whose rows and targets are 1e5 (or 1e-5) reaches the back-end, its
+  regularisation and the KKT check of :mod:`uvms_qp.hqp.kkt` at the scale 1;
 * every inequality row handed to a back-end (box and hard rows in the reduced space, frozen rows,
   the level's rows with their slacks) is scaled to unit norm in x (a slack ``t_i`` of a scaled
   row carries the weight ``w_i |a_i|^2``): row norms spread over 1e-3..1e3 reach the back-end as
   rows of norm 1;
 * an equality row whose projection on the freedom left is below ``rank_tol |a_i|`` is a constant
   of the level (its value is fixed by the levels above) and is left out of its QP, and so is a
-  row whose norm is below ``ZTOL`` of the problem's largest (a zero or tiny row); the rank of
+  row whose norm is below ``ZERO_ROW_TOL`` of the problem's largest (a zero or tiny row: it pins no
+  direction for the levels below either); the rank of
   the rows frozen into ``Z`` is decided against their unprojected norms, so round-off left by a
   projection never becomes a direction;
 * the end of the solve (``end``, a reading of ``clock``: the solver's, which a safe solver sets
@@ -58,13 +62,13 @@ import numpy as np
 
 from ..._validation import FloatArray, as_scalar
 from ...errors import InputError
-from ..degenerate import ZTOL
 from ..hard_set import hard_feasible, hard_point, polish_hard
 from ..kkt import active_set_from, certified_point
 from ..measure import hard_violation
 from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
+from ..tolerances import PIN_TOL, ZERO_ROW_TOL
 from . import Answer
 from .daqp import DAQP_SETTINGS
 
@@ -287,15 +291,15 @@ class CascadeBackend:
         if G is not None and h is not None and lam is not None:
             thr = mult_tol * max(1.0, float(np.abs(lam).max(initial=0.0)))
             X = rows.xrows()
-            tight = h - G @ z <= 1e-8 * (1.0 + np.abs(h))
+            tight = h - G @ z <= PIN_TOL * (1.0 + np.abs(h))
             strong = (lam > thr) & tight & (np.abs(X).max(axis=1, initial=0.0) > 0.0)
             active.append(X[strong])
         if lb is not None and ub is not None and lam_b is not None:
             zb = z[: rows.n]
             lam_b = np.abs(lam_b)[: rows.n]
             thr = mult_tol * max(1.0, float(lam_b.max(initial=0.0)))
-            tight = (zb - lb[: rows.n] <= 1e-8 * (1.0 + _finite_abs(lb[: rows.n]))) | (
-                ub[: rows.n] - zb <= 1e-8 * (1.0 + _finite_abs(ub[: rows.n])))
+            tight = (zb - lb[: rows.n] <= PIN_TOL * (1.0 + _finite_abs(lb[: rows.n]))) | (
+                ub[: rows.n] - zb <= PIN_TOL * (1.0 + _finite_abs(ub[: rows.n])))
             active.append(np.eye(rows.n)[(lam_b > thr) & tight])
         return np.vstack(active)
 
@@ -401,7 +405,9 @@ class CascadeBackend:
                                                         level.lower[ineq], 0.0)))
                 frozen.append((level.A[ineq], level.lower[ineq] - v[ineq] - scale,
                                level.upper[ineq] + v[ineq] + scale))
-            pinned = np.vstack((level.A[eq], active))
+            # (a row the level's QP left out as a constant pins no direction either)
+            live = _row_norms(level.A) > ZERO_ROW_TOL * self._big
+            pinned = np.vstack((level.A[eq & live], active))
             if pinned.shape[0] and Z.shape[1]:
                 ref = float(_row_norms(pinned).max(initial=0.0))
                 N, _ = _null_space(pinned @ Z, self.rank_tol, ref)
@@ -421,9 +427,9 @@ class CascadeBackend:
         p = Z.shape[1]
         w = level.weights if level.weights is not None else np.ones(level.m)
         norms = _row_norms(level.A)
-        # a row of norm below ZTOL of the problem's largest is a constant of the level (its
+        # a row of norm below ZERO_ROW_TOL of the problem's largest is a constant of the level (its
         # value moves by |a| |x| at most): left out of the QP, like a zero row
-        live = norms > ZTOL * self._big
+        live = norms > ZERO_ROW_TOL * self._big
         eq = (level.lower == level.upper) & live
         ineq = (level.lower != level.upper) & live
         if eq.any():
@@ -447,6 +453,13 @@ class CascadeBackend:
         ni = np.where(norms[ineq] > 0.0, norms[ineq], 1.0)
         if q_t:
             P[p:, p:] = np.diag(w[ineq] * ni * ni)
+        # the level's objective in its own units: divided by its Hessian's largest diagonal
+        # entry (the same minimiser; a level of rows 1e5 or 1e-5 reaches the QP at the scale 1)
+        unit = float(np.abs(np.diag(P)).max(initial=0.0))
+        if unit > 0.0:
+            P /= unit
+            q /= unit
+            floor /= unit
         rows, lb, ub = self._constraints(problem, xp, Z, width, frozen)
         if q_t:
             Ci = np.hstack((level.A[ineq] @ Z, np.diag(ni)))

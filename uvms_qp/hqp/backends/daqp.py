@@ -54,7 +54,7 @@ from ..problem import Problem
 from ..registry import SolverSpec
 from ..result import Status
 from . import Answer
-from .daqp_binding import DaqpBinding, native_available, open_daqp
+from .daqp_binding import DaqpBinding, check_version, open_daqp
 
 #: DAQP settings a caller may set (the keys of ``daqp.Model.settings``).
 DAQP_SETTINGS = frozenset((
@@ -235,7 +235,7 @@ class DaqpBackend:
         self.settings = merged
         self.rho_soft = float(merged.get("rho_soft", 1e-8))
         self.open_binding: Callable[[], DaqpBinding] = open_daqp
-        native_available()  # the binding's one-time check, now rather than in a first solve
+        check_version()  # a DAQP the binding does not mirror is refused here, not in a solve
         self._ladder = (self.rho_soft, *[r for r in self.rho_ladder if r != self.rho_soft])
         self.end = math.inf  # the solve's end: DAQP's own ``time_limit`` is cut to it
         self.clock: Callable[[], float] = perf_counter

@@ -1,21 +1,18 @@
-"""DAQP behind one small interface: direct C calls where possible, ``daqp.Model`` otherwise.
+"""DAQP behind one small interface: its C entry points, called on the caller's arrays.
 
 The DAQP back-end (:mod:`uvms_qp.hqp.backends.daqp`) sets a problem up once per structure and
 then, every solve, writes the rows, sides and per-row soft weights into arrays it owns and asks
-DAQP to take them over and solve. :func:`open_daqp` returns an object with that interface:
-
-* :class:`NativeDaqp` calls DAQP's C entry points (``setup_daqp_main``, ``daqp_update_ldp``,
-  ``daqp_solve``...), which its Python extension exports, through :mod:`ctypes` on the caller's
-  arrays: a refresh is one C call that re-reads rows, sides and soft weights, a solve one C call
-  that writes ``x`` into a buffer; no argument conversion, copy or dictionary per call. Its
-  structures mirror DAQP's ``types.h`` and ``api.h`` of the versions in
-  :data:`SUPPORTED_VERSIONS` (the workspace only up to the fields read here).
-* :class:`ModelDaqp` does the same through ``daqp.Model`` (one ``update`` and one
-  ``soft_weights`` call per refresh): same answers, a few microseconds slower. It serves for any
-  other installed version, on a platform whose extension does not export the symbols, or when
-  the start-up check of :func:`native_available` fails (the settings DAQP allocates must equal
-  its documented defaults, and a small hierarchical problem must give ``daqp.Model``'s answer
-  bit for bit).
+DAQP to take them over and solve; the optimality certificate solves its least-distance problems
+the same way. :class:`NativeDaqp` calls DAQP's C entry points (``setup_daqp_main``,
+``daqp_update_ldp``, ``daqp_solve``...), which its Python extension exports, through
+:mod:`ctypes` on those arrays: a refresh is one C call that re-reads rows, sides and soft
+weights, a solve one C call that writes ``x`` into a buffer; no argument conversion, copy or
+dictionary per call. Its structures mirror DAQP's ``types.h`` and ``api.h`` of the versions in
+:data:`SUPPORTED_VERSIONS` (the workspace only up to the fields read here), so another version
+is refused with an error that says which one to install, before any structure is read: a
+mirrored layout that does not match would read and write the wrong memory. The same interface
+through ``daqp.Model`` (slower, obviously right) lives under ``tests/`` as the oracle that the
+binding's answers, iterations and working sets are checked against, bit for bit.
 """
 
 from __future__ import annotations
@@ -94,6 +91,7 @@ _WORK_BYTES = C.sizeof(_Workspace) + 256  # slack in case of trailing padding
 _SETTING_NAMES = tuple(field[0] for field in _Settings._fields_)
 
 
+@cache
 def _daqp_version() -> str | None:
     try:
         return importlib.metadata.version("daqp")
@@ -130,21 +128,27 @@ def _library() -> Any:
     return lib
 
 
-@cache
-def native_available() -> bool:
-    """True when :class:`NativeDaqp` can be used (see the module docstring); checked once."""
-    if _daqp_version() not in SUPPORTED_VERSIONS:
-        return False
-    try:
-        lib = _library()
-    except (ImportError, OSError, AttributeError):
-        return False
-    return _self_check(lib)
+def check_version() -> None:
+    """Refuse a DAQP whose C structures this module does not mirror.
 
+    Raises:
+        ImportError: the installed version is not in :data:`SUPPORTED_VERSIONS` (the message
+            says which to install), or its extension does not export the C entry points.
+    """
+    version = _daqp_version()
+    if version not in SUPPORTED_VERSIONS:
+        raise ImportError(f"uvms-qp drives DAQP through its C API as of version(s) "
+                          f"{', '.join(SUPPORTED_VERSIONS)}; installed: {version}. Install it "
+                          f"with: pip install daqp=={SUPPORTED_VERSIONS[-1]}")
+    try:
+        _library()
+    except (OSError, AttributeError) as exc:
+        raise ImportError(f"DAQP {version}: its extension does not export the C API ({exc})"
+                          ) from exc
 
 
 class DaqpBinding(Protocol):
-    """The interface of :class:`NativeDaqp` and :class:`ModelDaqp`.
+    """The interface of :class:`NativeDaqp` (a test's oracle or fault injector offers it too).
 
     Attributes:
         x: Primal solution of the latest solve (may be a reused buffer: copy to keep).
@@ -198,36 +202,9 @@ class DaqpBinding(Protocol):
         """
 
 
-def open_daqp() -> DaqpBinding:
-    """A fresh DAQP binding: :class:`NativeDaqp` when available, else :class:`ModelDaqp`."""
-    return NativeDaqp() if native_available() else ModelDaqp()
-
-
-def _self_check(lib: Any) -> bool:
-    """Defaults read through the mirrored layout, and one hierarchical solve vs ``daqp.Model``."""
-    expected = _Settings()
-    lib.daqp_default_settings(C.byref(expected))
-    probe = NativeDaqp(lib)
-    read = probe._view.settings
-    if not read or any(getattr(read.contents, k) != getattr(expected, k) for k in _SETTING_NAMES):
-        return False
-    rng = np.random.default_rng(7)
-    n, sizes = 5, (3, 2, 2)
-    A = rng.standard_normal((sum(sizes), n))
-    bl = np.concatenate((-0.3 * np.ones(n), rng.standard_normal(sum(sizes))))
-    bu = bl.copy()
-    bu[:n] = 0.3
-    bp = np.cumsum((n, *sizes)).astype(np.intc)
-    H, f = np.diag(np.linspace(1.0, 2.0, n)), np.zeros(n)
-    sense = np.zeros(n + sum(sizes), dtype=np.intc)
-    answers = []
-    for binding in (probe, ModelDaqp()):
-        binding.setup(H, f, A.copy(), bu.copy(), bl.copy(), sense.copy(), bp)
-        binding.settings = {"rho_soft": 1e-8}
-        flag = binding.solve()
-        answers.append((flag, binding.x.copy()))
-    (f1, x1), (f2, x2) = answers
-    return bool(f1 == f2 and f1 in (1, 2) and np.array_equal(x1, x2))
+def open_daqp() -> NativeDaqp:
+    """A fresh DAQP workspace (:class:`NativeDaqp`); the version is checked on first use."""
+    return NativeDaqp()
 
 
 def _libc_free(pointer: Any) -> None:
@@ -253,10 +230,12 @@ class NativeDaqp:
     type (float64, or C int for ``sense`` and ``break_points``).
 
     Args:
-        lib: The loaded library (default: DAQP's extension); for the start-up check only.
+        lib: The loaded library (default: DAQP's extension, its version checked).
     """
 
     def __init__(self, lib: Any = None) -> None:
+        if lib is None:
+            check_version()
         self._lib = lib if lib is not None else _library()
         self._work: Any = C.create_string_buffer(_WORK_BYTES)
         self._view = _Workspace.from_buffer(self._work)
@@ -409,104 +388,3 @@ class NativeDaqp:
         lib.daqp_solve(self._res_ref, self._work)
         self.iterations = res.iter
         return int(res.exitflag)
-
-
-class ModelDaqp:
-    """:class:`DaqpBinding` through ``daqp.Model`` (see the module docstring)."""
-
-    def __init__(self) -> None:
-        import daqp
-
-        self._model = daqp.Model()
-        self._held: tuple[np.ndarray, ...] = ()
-        self._rho: tuple[FloatArray, FloatArray] | None = None
-        self._empty = np.zeros(0, dtype=np.intc)
-        self._f = np.zeros(0)
-        self.x = np.zeros(0)
-        self.lam = np.zeros(0)
-        self.solve_time = 0.0
-        self.iterations = 0
-
-    def setup(self, H: FloatArray, f: FloatArray, A: FloatArray, bupper: FloatArray,
-              blower: FloatArray, sense: np.ndarray, break_points: np.ndarray
-              ) -> tuple[int, float]:
-        """``daqp.Model.setup``; the arrays are kept and handed over again by :meth:`refresh`."""
-        self._held = (A, bupper, blower)
-        self._f = f
-        m = bupper.shape[0]
-        self._empty = np.zeros(m, dtype=np.intc)
-        self._rho = None
-        flag, setup_time = self._model.setup(H, f, A, bupper, blower, sense,
-                                             break_points=break_points)
-        if flag >= 0 and self._supports_soft_weights():
-            self._rho = (np.zeros(m), np.zeros(m))
-        return int(flag), float(setup_time)
-
-    def _supports_soft_weights(self) -> bool:
-        """The binding has ``soft_weights`` and DAQP was built with them (checked once)."""
-        setter = getattr(self._model, "soft_weights", None)
-        if setter is None:
-            return False
-        try:
-            setter()  # no arrays: changes nothing, refused by a build without them
-        except RuntimeError:
-            return False
-        return True
-
-    @property
-    def settings(self) -> dict[str, Any]:
-        """``daqp.Model.settings``."""
-        return dict(self._model.settings)
-
-    @settings.setter
-    def settings(self, new: dict[str, Any]) -> None:
-        current = self._model.settings
-        current.update(new)
-        self._model.settings = current
-
-    def soft_weights(self, rho: FloatArray) -> bool:
-        """``daqp.Model.soft_weights`` with ``rho`` on both sides; False if unsupported."""
-        if self._rho is None:
-            return False
-        self._rho[0][:] = rho  # kept: the next refresh hands them over again
-        self._rho[1][:] = rho
-        self._model.soft_weights(rho_l=rho, rho_u=rho)
-        return True
-
-    def soft_weight_views(self) -> tuple[FloatArray, FloatArray] | None:
-        """Own arrays of soft weights, handed to DAQP by :meth:`refresh`."""
-        return self._rho
-
-    def refresh(self) -> int:
-        """``daqp.Model.update`` of rows and sides, then the soft weights."""
-        A, bu, bl = self._held
-        flag = int(self._model.update(A=A, bupper=bu, blower=bl))
-        if self._rho is not None:
-            self._model.soft_weights(rho_l=self._rho[0], rho_u=self._rho[1])
-        return flag
-
-    def restart(self, sense: np.ndarray) -> int:
-        """``daqp.Model.update(sense=...)``: the next solve starts cold."""
-        return int(self._model.update(sense=sense))
-
-    def solve(self) -> int:
-        """``daqp.Model.solve``: sets ``x`` (fresh), time and iterations; returns the flag."""
-        x, _, flag, info = self._model.solve()
-        self.x = x
-        self.lam = np.asarray(info["lam"], dtype=np.float64)
-        self.solve_time = float(info["solve_time"])
-        self.iterations = int(info["iterations"])
-        return int(flag)
-
-    def solve_ldp(self, rows: bool, warm: bool) -> int:
-        """``daqp.Model.update`` of ``f``, sides (and rows), empty working set; then solve.
-
-        Always from an empty working set (``warm`` is ignored: the fallback binding of a DAQP
-        whose C API is not reachable).
-        """
-        A, bu, bl = self._held
-        if rows:
-            self._model.update(f=self._f, A=A, bupper=bu, blower=bl, sense=self._empty)
-        else:
-            self._model.update(f=self._f, bupper=bu, blower=bl, sense=self._empty)
-        return self.solve()

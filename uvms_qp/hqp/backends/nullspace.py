@@ -25,7 +25,10 @@ of Nakamura and Hanafusa (1986), ``sigma / (sigma^2 + lambda^2)`` with
 the answer is at most ``|b| / epsilon`` and the level's row space is still removed from the
 freedom of the levels below. A damped answer is not that level's optimum: the optimality
 certificate of the measurement judges it like any answer, and the result's ``info["damped"]``
-lists the damped levels.
+lists the damped levels. Damping only shrinks the answer along a weak direction
+(``sigma / epsilon^2 <= 1 / sigma``), so the closed form never asks for more than the undamped
+optimum would; its status is ``optimal`` only when the certificate proves every level of the
+damped answer (met, or certified optimal: the damping cost no level more than its tolerance).
 """
 
 from __future__ import annotations
@@ -169,5 +172,8 @@ class NullspaceBackend:
         x, damped = nullspace_solve(problem, self.rcond, self.atol, self.damping)
         if not damped:
             return Answer(x)
-        return Answer(x, message=f"damped level(s) {', '.join(map(str, damped))}: the answer "
-                      "is bounded, not the undamped optimum", info={"damped": damped})
+        # a claim like any other: the measurement and the certificate decide whether the damped
+        # answer is still the optimum (a damped direction the level hardly asks for changes
+        # nothing), and say which level it cost when it is not
+        return Answer(x, message=f"damped level(s) {', '.join(map(str, damped))}",
+                      info={"damped": damped})
