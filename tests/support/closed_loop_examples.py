@@ -100,9 +100,13 @@ def arm_stack(goal: np.ndarray) -> Stack:
 def run(model: Model, stack: Stack, q: np.ndarray, steps: int, **options):
     """``steps`` closed-loop steps of the DAQP controller from ``q`` (kinematic integration).
 
+    An offline run: no deadline unless ``options`` give one (the controller's default, the
+    period, would let the machine's load decide which optional solves a step makes).
+
     Returns:
         ``(commands (steps, nv), step results, final configuration)``.
     """
+    options.setdefault("deadline", None)
     controller = Controller(model, stack, solver="daqp", dt=DT, **options)
     commands, results = [], []
     for k in range(steps):
