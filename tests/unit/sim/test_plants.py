@@ -269,3 +269,24 @@ def test_a_slowly_varying_current_reaches_the_dynamic_plant():
     np.testing.assert_allclose(water.velocity(5.0), 0.3 * np.array([np.cos(0.5), np.sin(0.5),
                                                                     0.0]))
     assert sc.current.oscillation == 0.1
+
+
+@pytest.mark.parametrize(("feedforward", "share"), [("model", (0.0, 0.1)),
+                                                     ("nominal", (0.8, 1.2))])
+def test_only_the_feed_forward_told_the_current_holds_its_drag(feedforward, share):
+    # station in a 0.3 m/s head current: the vehicle's drag is (D_l + D_q |u_r|) u_r at the
+    # relative surge u_r = 0.3 m/s; the model feed-forward is told the current and carries it,
+    # the nominal one is not and its integral must
+    sc = scenario(f'\n[current]\ndirection = 3.14159\nspeed = 0.3\n'
+                  f'[plant]\ntype = "dynamic"\nfeedforward = "{feedforward}"\n')
+    plant = sc.make_plant()
+    plant.start(sc.q0)
+    body = plant.spec.parameters.vehicle
+    drag = body.linear_damping[0] * 0.3 + body.quadratic_damping[0] * 0.09
+    t = 0.0
+    for _ in range(60):  # 6 s holding station
+        plant.advance(np.zeros(10), t)
+        t += sc.dt
+    assert abs(plant.body_velocity[0]) < 1e-3
+    integral = (plant.loop.ki * plant.loop.integral)[0]
+    assert share[0] * drag <= integral <= share[1] * drag
