@@ -184,6 +184,29 @@ def test_the_payload_of_a_plant_table_is_attached_at_its_time():
     assert torque[t > 0.35].max() > torque[t < 0.2].max()
 
 
+@pytest.mark.parametrize("mass", [1.5, 2.5])
+def test_a_payload_beyond_the_arm_s_rating_is_reported_not_refused(tmp_path, capsys, mass):
+    # the bundled arm is rated 2 kg at full reach: 2.5 kg is flagged, 1.5 kg is not
+    path = tmp_path / "s.toml"
+    path.write_text(bluerov_scenario("duration = 0.2", '\n[plant]\ntype = "dynamic"\n'
+                                     f'[plant.payload]\ntime = 0.1\nmass = {mass}\n'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--no-plots"]) == 0
+    printed = capsys.readouterr()
+    record = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert record["plant_settings"]["rated_payload"] == 2.0
+    assert record["metrics"]["payload_mass"] == mass
+    assert record["metrics"]["payload_rating_share"] == pytest.approx(mass / 2.0)
+    assert record["steps"] == 2 and record.get("stopped") is None
+    assert set(record["metrics"]["joint_torque_max"]) == {"axis_e", "axis_d", "axis_c", "axis_b"}
+    assert "payload_rating_share" in printed.out
+    flagged = "warning: the payload of 2.5 kg exceeds the arm's rated payload of 2 kg"
+    if mass > 2.0:
+        assert flagged in printed.err and record["warnings"] == [printed.err.split(
+            "warning: ")[-1].strip()]
+    else:
+        assert "warning" not in printed.err and "warnings" not in record
+
+
 def test_scenario_build_takes_a_plant_and_sensors():
     sc = scenario()
     spec = sc.plant.as_kind("dynamic", sc.model)
