@@ -77,7 +77,7 @@ started at the current point), then certifies the result again.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from time import perf_counter
 from typing import Any, NamedTuple, Protocol
@@ -421,9 +421,10 @@ class _Work:
 class Certifier:
     """The run-time optimality certificate (module docstring), one callable per solver.
 
-    ``certifier(problem, x, s, residuals) -> Certificate``; keeps the buffers and DAQP
-    workspaces of each problem it has seen (the last few), and per level the sides that carried
-    the multipliers of its latest certified answer (tried first on the next answer).
+    ``certifier(problem, x, s, residuals, hard_violation, level_scales) -> Certificate``;
+    keeps the buffers and DAQP workspaces of each problem it has seen (the last few), and per
+    level the sides that carried the multipliers of its latest certified answer (tried first
+    on the next answer).
 
     Args:
         least_distance: Makes the least-distance workspace of each level (a solver passes
@@ -469,8 +470,8 @@ class Certifier:
         return work
 
     def __call__(self, problem: Problem, x: FloatArray, s: FloatArray | None = None,
-                 residuals: list[float] | None = None, hard_violation: float | None = None
-                 ) -> Certificate:
+                 residuals: list[float] | None = None, hard_violation: float | None = None,
+                 level_scales: Sequence[float | None] | None = None) -> Certificate:
         """The certificate of every level of ``x`` (see the module docstring).
 
         Args:
@@ -479,6 +480,8 @@ class Certifier:
             s: ``slacks(problem, x)`` when the caller has them (the measurement's).
             residuals: The level residuals ``rho_k`` when the caller has them.
             hard_violation: ``max |s|`` over the box and hard rows when the caller has it.
+            level_scales: Per level ``problem.level_scale(k)`` where the caller has it, else None
+                (the measurement's, for the levels above its bare tolerance).
         """
         n, p = problem.n, len(problem.sizes)
         x = np.asarray(x, dtype=np.float64)
@@ -496,7 +499,9 @@ class Certifier:
         unmet, scales = [], []
         for k, r in enumerate(residuals):
             if r > level_tol:
-                scale = problem.level_scale(k)
+                scale = level_scales[k] if level_scales is not None else None
+                if scale is None:
+                    scale = problem.level_scale(k)
                 if r > level_tol * scale:
                     unmet.append(k)
                     scales.append(scale)

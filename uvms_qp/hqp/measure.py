@@ -40,11 +40,14 @@ from .tolerances import HARD_TOL, LEVEL_TOL
 if TYPE_CHECKING:  # pragma: no cover - the certificate is handed in by the solver
     from .certificate import Certificate
 
-#: ``certify(problem, x, s, residuals, hard_violation) -> Certificate``: the optimality
-#: certificate asked about an answer with an unmet level (a solver's
+#: ``certify(problem, x, s, residuals, hard_violation, scales) -> Certificate``: the
+#: optimality certificate asked about an answer with an unmet level (a solver's
 #: :class:`uvms_qp.hqp.certificate.Certifier`, or a stand-in a test installs), given the
-#: measurement's slacks, level residuals and hard violation.
-Certify = Callable[[Problem, FloatArray, FloatArray, list[float], float], "Certificate"]
+#: measurement's slacks, level residuals, hard violation and the level scales it computed
+#: (``Problem.level_scale(k)`` of each level whose residual exceeds the bare tolerance, None
+#: for the others).
+Certify = Callable[[Problem, FloatArray, FloatArray, list[float], float, list[float | None]],
+                   "Certificate"]
 
 _OPTIMAL = Status.OPTIMAL
 _SQRT = math.sqrt
@@ -196,12 +199,17 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             message = (message + "; " if message else "") + "non-finite level residual"
         else:
             status = _OPTIMAL
-            unmet = tuple(k for k, r in enumerate(residuals)
-                          if r > level_tol and r > level_tol * problem.level_scale(k))
+            # a level's scale only where its residual exceeds the bare tolerance (kept for the
+            # certificate, which judges the same levels)
+            scales: list[float | None] = [
+                problem.level_scale(k) if r > level_tol else None
+                for k, r in enumerate(residuals)]
+            unmet = tuple(k for k, (r, scale) in enumerate(zip(residuals, scales, strict=True))
+                          if scale is not None and r > level_tol * scale)
             if unmet:
                 infeasible = unmet[0]
             if infeasible is not None and certify is not None:
-                cert = certify(problem, x, s, residuals, hv)
+                cert = certify(problem, x, s, residuals, hv, scales)
                 if not cert.ok:
                     status = Status.UNPROVEN
                     message = (message + "; " if message else "") + cert.reason()

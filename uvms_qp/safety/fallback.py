@@ -62,7 +62,7 @@ import time
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from .._validation import FloatArray, as_scalar
 from ..errors import InputError, NoSolutionFound
@@ -128,9 +128,8 @@ def default_alternate(solver: str, *, cascade_only: bool = False) -> str | None:
     return None
 
 
-@dataclass(frozen=True, slots=True)
-class StageRecord:
-    """One stage a step tried.
+class StageRecord(NamedTuple):
+    """One stage a step tried (a named tuple: one is built on every step).
 
     Attributes:
         stage: The stage (:data:`STAGES`, ``repair``, ``damped``; ``relaxed to k levels`` and
