@@ -2,14 +2,16 @@
 
 Runs the scenario's HQP stack and each closed-form scheme listed in its ``schemes`` (the papers'
 redundancy resolutions, see :mod:`uvms_qp.schemes`), writes ``DIR/<scheme>/results.json`` per
-scheme, ``DIR/comparison.md`` and ``DIR/comparison.json`` (the side-by-side metrics table) and
-PNG figures with the schemes overlaid, and prints the table within the terminal's width
-(``COLUMNS`` when set, 80 characters in a pipe): the schemes that do not fit follow in a second
-table. A run that breaks the scenario's hard bounds is marked ``(exceeded)`` in the table and
-named in a warning: the closed-form schemes ignore the bounds, although each of their steps
-reports status ``optimal``. An invalid scenario, an unknown scheme, a ``--duration`` out of the
-scenario's limits or an unusable ``--out`` (checked before anything runs) exits with status 2 and
-a one-line message.
+scheme, ``DIR/comparison.md`` and ``DIR/comparison.json`` (the side-by-side metrics table, its
+first row the plant each run drove) and PNG figures with the schemes overlaid, and prints the table
+within the terminal's width (``COLUMNS`` when set, 80 characters in a pipe): the schemes that do
+not fit follow in a second table. A run that breaks the scenario's hard bounds is marked
+``(exceeded)`` in the table and named in a warning: the closed-form schemes ignore the bounds,
+although each of their steps reports status ``optimal``. An invalid scenario, an unknown scheme, a
+``--duration`` out of the scenario's limits or an unusable ``--out`` (checked before anything runs)
+exits with status 2 and a one-line message. ``--plant dynamic`` runs every scheme on the floating
+vehicle (``docs/dynamics.md``), ``--plant kinematic`` on the exact plant, whatever the scenario's
+``[plant]`` says.
 """
 
 from __future__ import annotations
@@ -27,6 +29,10 @@ def _options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--duration", type=float,
                         help="override the simulated time [s] (at least one control period)")
+    parser.add_argument("--plant", choices=("kinematic", "dynamic"),
+                        help="override the scenario's plant for every scheme: 'dynamic' runs "
+                             "them on a floating vehicle (thrusters, hydrodynamics, the arm's "
+                             "reaction)")
 
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
@@ -86,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario)
     if args.duration is not None:
         scenario = scenario.with_duration(args.duration, "--duration")
+    if args.plant is not None:
+        scenario = scenario.with_plant(args.plant, "--plant")
     subset = None
     if args.schemes:
         subset = [name.strip() for name in args.schemes.split(",") if name.strip()]

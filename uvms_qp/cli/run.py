@@ -93,6 +93,8 @@ DYNAMIC_KEYS = (
     ("energy", "J"),
     ("unmet_force_max", "N"),
     ("unmet_moment_max", "N m"),
+    ("payload_mass", "kg"),
+    ("payload_rating_share", ""),
 )
 
 
@@ -118,6 +120,7 @@ def dynamic_summary(dynamic: dict[str, Any], kinematic: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate, simulate; write ``results.json`` and the figures into ``args.out``."""
+    from ..sim.dynamic_metrics import rating_notes
     from ..sim.plots import plot_results
     from ..sim.results import write_results
     from ..sim.runner import simulate
@@ -175,4 +178,6 @@ def run(args: argparse.Namespace) -> int:
             print(dynamic_summary(result.metrics(), reference.metrics()))
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
+    for note in rating_notes(result.metrics(), result.plant_settings):
+        print(f"warning: {note}", file=sys.stderr)
     return 0

@@ -9,7 +9,9 @@ interval, metric percentiles, success by parameter) and two figures.
 Runs execute on ``--workers`` local processes (default: the usable CPUs), or on a Dask cluster
 with ``--scheduler tcp://host:8786`` (needs ``pip install 'uvms-qp[cluster]'``). ``--replay SEED``
 re-runs one run alone from the seed in its record and writes its ``results.json`` and figures
-into ``DIR``. A bad sweep file or option exits with status 2 and one line, before any run.
+into ``DIR``. ``--model-path FILE`` registers a model file's model for the base scenario, in
+this process and in every worker (a Dask worker must see the file at the same path). A bad
+sweep file or option exits with status 2 and one line, before any run.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import time
 from typing import Any
 
 from ..errors import ConfigError
-from ._common import output_directory, plain, writing_output
+from ._common import add_model_path, output_directory, plain, register_model_paths, writing_output
 
 #: Longest silence of the progress lines printed when standard error is not a terminal [s].
 PROGRESS_EVERY = 10.0
@@ -47,6 +49,7 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--replay", type=int, metavar="SEED",
                         help="re-run the one run of this seed (from runs.csv) and write its "
                              "results.json and figures")
+    add_model_path(parser)
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     parser.add_argument("--quiet", action="store_true", help="no progress, no summary")
     parser.set_defaults(func=run)
@@ -165,7 +168,8 @@ def run(args: argparse.Namespace) -> int:
     from ..sweep.report import write_report
     from ..sweep.spec import load_sweep
 
-    spec = load_sweep(args.sweep)
+    register_model_paths(args)
+    spec = load_sweep(args.sweep).with_model_files(args.model_path)
     if args.runs is not None:
         spec = spec.with_runs(args.runs)
     if args.workers is not None:

@@ -58,6 +58,9 @@ ALPHA5_LIKE = ("Alpha-5-like assumption: 1.3 kg, 0.6 L split by link length, uni
 #: The assumed arm: total mass in air [kg] and displaced volume [m^3] (facts on the Reach Alpha 5).
 ARM_MASS = 1.3
 ARM_VOLUME = 0.6e-3
+#: The arm's rated payload at full reach [kg] (mass in air; the vendor's figure of about 2 kg,
+#: facts on the Reach Alpha 5). The facts give no per-joint torque rating.
+ARM_RATED_PAYLOAD = 2.0
 #: Added-mass coefficient of a circular section in cross-flow (2-D potential flow).
 CROSS_FLOW_ADDED_MASS_COEFFICIENT = 1.0
 #: Drag coefficients of the link cylinders: in cross-flow and on the end area (axial flow).
@@ -210,6 +213,7 @@ def _carrying_the_arm(name: str, vehicle: BodyParameters, gravity: float, source
     return PlantParameters(
         name=name, vehicle=vehicle, links=alpha5_like_links(_arm_model(), rho),
         water_density=rho, gravity=gravity, thrusters=ThrusterLayout.bluerov2_heavy(),
+        rated_payload=ARM_RATED_PAYLOAD,
         source=f"{source}; arm: {ALPHA5_LIKE}; thrusters: the Heavy's eight T200 at 16 V")
 
 

@@ -13,6 +13,7 @@ Layout (units as in :class:`~uvms_qp.dynamics.parameters.BodyParameters`)::
     water_density = 1025.0               # [kg/m^3]
     gravity = 9.81                       # [m/s^2]
     joint_servo_time_constant = 0.03     # [s]
+    rated_payload = 2.0                  # [kg] the arm's rated payload at full reach (optional)
 
     [vehicle]                            # FRD body frame
     mass = 13.5                          # [kg]
@@ -54,7 +55,7 @@ from .parameters import BODY_FIELDS, BodyParameters, PlantParameters, parameter_
 from .thrusters import AllocationRankError, ThrusterLayout
 
 _TOP_KEYS = ("name", "source", "base", "water_density", "gravity", "joint_servo_time_constant",
-             "vehicle", "links", "thrusters")
+             "rated_payload", "vehicle", "links", "thrusters")
 _BODY_KEYS = (*BODY_FIELDS, "source")
 _MAX_BYTES = 1_000_000
 
@@ -156,7 +157,8 @@ def load_plant_parameters(path: str | Path) -> PlantParameters:
                        f"joints: {', '.join(base.links)}), so its link needs every key")
         links[joint] = _body(_table(table, where, file), links.get(joint), where, file, missing)
     changes: dict[str, Any] = {"name": data["name"], "vehicle": vehicle, "links": links}
-    for key in ("source", "water_density", "gravity", "joint_servo_time_constant"):
+    for key in ("source", "water_density", "gravity", "joint_servo_time_constant",
+                "rated_payload"):
         if key in data:
             changes[key] = data[key]
     if "thrusters" in data:

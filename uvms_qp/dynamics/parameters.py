@@ -247,6 +247,8 @@ class PlantParameters:
         thrusters: The vehicle's thruster layout (an object of the actuator layer) or None;
             opaque to the plant, whose input is the vehicle wrench.
         source: Where the set comes from (its bodies carry their own sources too).
+        rated_payload: The payload the arm is rated to hold at full reach [kg] (mass in air),
+            > 0, or None when unknown. A run reports a payload beyond it; nothing is limited.
     """
 
     name: str
@@ -257,6 +259,7 @@ class PlantParameters:
     gravity: float = DEFAULT_GRAVITY
     thrusters: Any = field(default=None)
     source: str = ""
+    rated_payload: float | None = None
 
     def __post_init__(self) -> None:
         setattr_ = object.__setattr__
@@ -278,6 +281,9 @@ class PlantParameters:
         if not isinstance(self.source, str):
             raise ParameterError(f"expected a string, got {type(self.source).__name__}",
                                  "source", value=self.source)
+        if self.rated_payload is not None:
+            setattr_(self, "rated_payload", _number(self.rated_payload, "rated_payload",
+                                                    minimum=0.0, strict=True))
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, PlantParameters):
@@ -285,6 +291,7 @@ class PlantParameters:
         return (self.name == other.name and self.vehicle == other.vehicle
                 and dict(self.links) == dict(other.links) and self.source == other.source
                 and self.thrusters == other.thrusters
+                and self.rated_payload == other.rated_payload
                 and all(getattr(self, f) == getattr(other, f) for f in PLANT_FIELDS))
 
     __hash__ = None  # type: ignore[assignment]
@@ -294,7 +301,8 @@ class PlantParameters:
         # parameter sweep)
         return (PlantParameters, (self.name, self.vehicle, dict(self.links),
                                   self.joint_servo_time_constant, self.water_density,
-                                  self.gravity, self.thrusters, self.source))
+                                  self.gravity, self.thrusters, self.source,
+                                  self.rated_payload))
 
     def bodies(self) -> dict[str, BodyParameters]:
         """``{"vehicle": ..., "links.<joint>": ...}``: every body with its key path."""

@@ -522,10 +522,18 @@ class FloatingPlant:
 
     def relative_velocity(self, q: Any, v: Any, t: float = 0.0) -> FloatArray:
         """The vehicle's body twist relative to the water, ``nu - [R^T V_c(t); 0]`` (6,)."""
-        q = self.model.check_configuration(q)
         v = _vector(v, "v", self.nv)
+        return v[:6] - self.water_velocity(q, t)
+
+    def water_velocity(self, q: Any, t: float = 0.0) -> FloatArray:
+        """The water's twist in the vehicle's body frame (FRD), ``[R^T V_c(t); 0]`` (6,).
+
+        [m/s, rad/s]; zeros in still water. ``q`` sets the vehicle's attitude ``R`` (body to
+        NED), ``t`` [s] the time of a varying current.
+        """
+        q = self.model.check_configuration(q)
         pin.forwardKinematics(self._pm, self._data, q)
-        return v[:6] - self._water_velocity(t)[:6]
+        return self._water_velocity(t)[:6]
 
     def __repr__(self) -> str:
         held = "" if self.payload is None else f", payload {self.payload.mass:g} kg"

@@ -3,11 +3,14 @@
 The kinematic controller produces a body-velocity reference ``nu_ref`` for the vehicle; this loop
 turns the error ``nu_ref - nu`` into the body wrench the thrusters are asked for, per DOF
 
-    tau_j = kp_j e_j + ki_j I_j + g_j(q) + d_j(nu_ref)         (actuated DOFs; 0 on passive ones)
+    tau_j = kp_j e_j + ki_j I_j + g_j(q) + d_j(nu_ref - nu_c)  (actuated DOFs; 0 on passive ones)
 
 with ``I_j`` the integral of ``e_j``, ``g(q)`` the restoring wrench (weight and buoyancy) fed
-forward and, optionally, ``d(nu_ref) = (D_l + D_q |nu_ref|) nu_ref`` the damping at the
-reference velocity fed forward (the two-layer scheme validated at sea by Simetti et al.,
+forward and, optionally, ``d(nu_r) = (D_l + D_q |nu_r|) nu_r`` the damping at the reference
+velocity relative to the water fed forward: the plant's damping acts on the velocity relative to
+the water, ``nu_c`` the water's twist in the body frame when the loop is told the current, zero
+when it is not (then the integral must find the rest; the two-layer scheme validated at sea by
+Simetti et al.,
 "Floating underwater manipulation: developed control methodology and experimental validation
 within the TRIDENT project", J. Field Robotics 31(3), 2014; Antonelli, "Underwater Robots",
 Springer, 2014, Chapter 6).
@@ -119,7 +122,9 @@ class VelocityLoop:
             and buoyancy at configuration ``q`` (Fossen's ``g(eta)``, the sign that cancels the
             restoring forces) [N, N m], fed forward; None: none.
         linear_damping: ``D_l`` per DOF (6,), magnitudes; with ``quadratic_damping`` feeds
-            forward ``(D_l + D_q |nu_ref|) nu_ref``. None for both: no damping feed-forward.
+            forward ``(D_l + D_q |nu_r|) nu_r`` at the reference relative to the water,
+            ``nu_r = nu_ref - nu_c`` (:meth:`step`'s ``water``). None for both: no damping
+            feed-forward.
         quadratic_damping: ``D_q`` per DOF (6,), magnitudes (default zeros when ``D_l`` given).
         integral_limit: Bound on ``|ki_j I_j|`` per DOF (6,) [N, N m], > 0 (``inf``: none);
             typically the largest wrench the thrusters can give each DOF
@@ -198,7 +203,8 @@ class VelocityLoop:
                 largest wrench per DOF it can give.
             bandwidth: Closed-loop natural frequency [rad/s] (one or (6,)).
             damping_ratio: Closed-loop damping ratio (one or (6,)).
-            damping_feedforward: Feed the damping at ``nu_ref`` forward.
+            damping_feedforward: Feed the damping at the reference (relative to the water
+                when :meth:`step` is told it) forward.
             kp: Proportional gains (6,) to use instead of the placed ones (None: placed).
             ki: Integral gains (6,) to use instead of the placed ones (None: placed). With both
                 given, no gain is placed (a vehicle the recipe does not suit still gets a loop).
@@ -275,7 +281,8 @@ class VelocityLoop:
 
     # --- the step ---------------------------------------------------------------------------
 
-    def step(self, nu_ref: Any, nu: Any, q: Any = None, unmet: Any = None) -> FloatArray:
+    def step(self, nu_ref: Any, nu: Any, q: Any = None, unmet: Any = None,
+             water: Any = None) -> FloatArray:
         """The body wrench to demand this period [N, N m] (6,), zero on passive DOFs.
 
         Args:
@@ -286,6 +293,10 @@ class VelocityLoop:
             unmet: The unmet wrench of the previous allocation (6,) [N, N m]
                 (:attr:`Allocation.unmet`); None: nothing unmet. A DOF whose unmet component
                 (beyond :data:`UNMET_TOLERANCE`) has the sign of its error does not integrate.
+            water: The water's twist in the body frame (FRD) ``nu_c`` (6,) [m/s, rad/s]
+                (:meth:`~uvms_qp.dynamics.FloatingPlant.water_velocity`): the damping is fed
+                forward at ``nu_ref - nu_c``; None: the loop is not told the current (still
+                water assumed, ``nu_c = 0``).
 
         Raises:
             ShapeError, NonFiniteError: a vector that is not 6 finite numbers (named).
@@ -316,5 +327,6 @@ class VelocityLoop:
             wrench += g * mask
         if self._damping is not None:
             dl, dq = self._damping  # zero on passive DOFs
-            wrench += (dl + dq * np.abs(reference)) * reference
+            relative = reference if water is None else reference - as_vector(water, "water", 6)
+            wrench += (dl + dq * np.abs(relative)) * relative
         return wrench

@@ -5,7 +5,9 @@ scenario's ``schemes`` (each on a fresh copy of the scenario, so tasks and event
 records the schemes' own diagnostic scalars (shaping function, fuzzy weights, path rate...) every
 step, and returns a :class:`Comparison`. :meth:`Comparison.write` stores one ``results.json`` per
 scheme (the simulator's writer, in ``DIR/<scheme>/``), the recorded diagnostics
-(``DIR/<scheme>/scheme_info.json``) and the table (``DIR/comparison.md``, ``DIR/comparison.json``).
+(``DIR/<scheme>/scheme_info.json``) and the table (``DIR/comparison.md``, ``DIR/comparison.json``),
+whose first row (``plants`` in the JSON) says which plant each run drove: the scenario's
+``[plant]`` (kinematic by default) or the one :meth:`Scenario.with_plant` set.
 
 Besides the simulator's metrics, the table reports a few that the papers' claims need:
 ``min_manipulability_time`` [s], ``joint_rate_max`` [rad/s], ``vehicle_speed_max`` [m/s],
@@ -131,6 +133,12 @@ class SchemeRun:
     info: dict[str, FloatArray] = field(default_factory=dict)
     metrics: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def plant(self) -> str | None:
+        """The plant the run drove (``"kinematic"`` or ``"dynamic"``), None without a record."""
+        plant = getattr(self.result, "plant", None)
+        return None if plant is None else str(plant)
+
 
 @dataclass
 class Comparison:
@@ -199,8 +207,14 @@ class Comparison:
         return lines
 
     def cells(self) -> list[tuple[str, str, list[str]]]:
-        """:meth:`table` as text, with the bound violations that exceed the tolerance marked."""
+        """:meth:`table` as text, with the bound violations that exceed the tolerance marked.
+
+        A first row ``plant`` says which plant each run drove (kinematic or dynamic).
+        """
         rows = []
+        plants = [run.plant for run in self.runs]
+        if any(plant is not None for plant in plants):
+            rows.append(("plant", "", [plant or "-" for plant in plants]))
         for key, unit, values in self.table():
             texts = [format_value(v) for v in values]
             if key == "bound_violation_max":
@@ -250,6 +264,7 @@ class Comparison:
         table = {
             "scenario": self.scenario,
             "schemes": [run.name for run in self.runs],
+            "plants": [run.plant for run in self.runs],
             "metrics": {_json_key(key, unit): {"unit": unit,
                                                "values": [_json_value(v) for v in values]}
                         for key, unit, values in self.table()},

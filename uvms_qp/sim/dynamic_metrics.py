@@ -14,7 +14,12 @@ per servo tick, and the run's states), next to the kinematic metrics of
   thruster): the share of servo ticks whose allocated command sat at a force limit, and
   ``saturation_share_max``;
 - ``energy`` [J]: the thrusters' electrical energy over the run; ``power_mean`` [W];
-- ``joint_torque_max`` (by joint) [N m]: the largest torque a joint's servo produced;
+- ``joint_torque_max`` (by joint) [N m]: the largest torque a joint's servo produced (the
+  parameter sets state no per-joint torque rating to hold it against);
+- ``payload_mass`` [kg] (mass in air) once the tool took a payload, and ``payload_rating_share``
+  (``payload_mass`` over the arm's rated payload at full reach, when the parameter set states
+  one): above 1 the arm holds more than it is rated for. The run is not stopped;
+  :func:`rating_notes` says so in words (a record's ``warnings``, the command line's warnings);
 - ``unmet_force_max`` [N] and ``unmet_moment_max`` [N m]: the largest force and moment (norms)
   of a demanded wrench the thrusters could not give (0 when the allocation always met it).
 
@@ -83,7 +88,28 @@ def dynamic_metrics(result: SimulationResult) -> dict[str, Any]:
         unmet = np.abs(series.wrench_unmet)
         out["unmet_force_max"] = float(np.linalg.norm(unmet[:, :3], axis=1).max())
         out["unmet_moment_max"] = float(np.linalg.norm(unmet[:, 3:], axis=1).max())
+    payload = result.plant_settings.get("payload")
+    if series.payload_time is not None and payload is not None:
+        out["payload_mass"] = float(payload["mass"])
+        rated = result.plant_settings.get("rated_payload")
+        if rated:
+            out["payload_rating_share"] = float(payload["mass"]) / float(rated)
     return out
+
+
+def rating_notes(metrics: dict[str, Any], plant_settings: dict[str, Any]) -> list[str]:
+    """One line per rating a run exceeded: a payload beyond the arm's rated payload.
+
+    Args:
+        metrics: The run's metrics (``payload_mass``, ``payload_rating_share``).
+        plant_settings: Its plant's settings (``rated_payload`` [kg]).
+    """
+    share = metrics.get("payload_rating_share")
+    if share is None or share <= 1.0:
+        return []
+    rated = float(plant_settings["rated_payload"])
+    return [f"the payload of {metrics['payload_mass']:g} kg exceeds the arm's rated payload of "
+            f"{rated:g} kg at full reach ({100 * share:.0f} % of it); the run was not limited"]
 
 
 def phase_metrics(result: SimulationResult, start: float, end: float) -> dict[str, Any]:

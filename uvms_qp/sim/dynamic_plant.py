@@ -7,10 +7,11 @@ Underwater Robots, Springer):
 
 - every servo period (``servo_rate``, 100 Hz by default): the vehicle's body-velocity loop
   (:class:`~uvms_qp.dynamics.VelocityLoop`: PI with feed-forward of the restoring wrench and of
-  the damping at the reference) turns ``nu_ref - nu`` (``nu`` as the sensors read it) into a
-  demanded body wrench, the allocation (:class:`~uvms_qp.dynamics.ThrustAllocator`, bounded
-  least squares) into thruster commands within their limits; the arm's velocity servos take
-  their joint rate references (clipped into the joints' rate limits);
+  the damping at the reference, relative to the water when ``feedforward = "model"``) turns
+  ``nu_ref - nu`` (``nu`` as the sensors read it) into a demanded body wrench, the allocation
+  (:class:`~uvms_qp.dynamics.ThrustAllocator`, bounded least squares) into thruster commands
+  within their limits; the arm's velocity servos take their joint rate references (clipped into
+  the joints' rate limits);
 - every physics step (``physics_step``): the thrusters' forces follow their commands through
   dead band and lag (:class:`~uvms_qp.dynamics.ThrusterDynamics`), and the equations of motion of
   the whole chain (:class:`~uvms_qp.dynamics.FloatingPlant`: rigid bodies, added mass, damping,
@@ -207,6 +208,8 @@ class DynamicPlant(RunState):
                             }[spec.feedforward]
         self.loop = _velocity_loop(params, spec, layout, model.actuated, self.servo_period,
                                    self.feedforward)
+        # the model feed-forward knows the water: its damping is fed at the relative velocity
+        self._told_current = spec.feedforward == "model" and self.physics.current is not None
         self.sensors = sensors
         self._actuated = [NU_NAMES.index(d) for d in model.actuated]
         self._n_vehicle = int(model.n_vehicle)
@@ -273,7 +276,8 @@ class DynamicPlant(RunState):
                 self._payload_attached = tick
             nu = v[:6]
             measured = nu if self.sensors is None else self.sensors.body_velocity(nu)
-            demand = self.loop.step(reference, measured, q, self._unmet)
+            water = physics.water_velocity(q, tick) if self._told_current else None
+            demand = self.loop.step(reference, measured, q, self._unmet, water)
             allocation = self.allocator.allocate(demand)
             self._unmet = allocation.unmet
             thrusters.set_command(allocation.forces)

@@ -123,6 +123,7 @@ class PlantSpec:
             "type": self.kind,
             "parameters": None if params is None else params.name,
             "parameters_source": None if params is None else params.source,
+            "rated_payload": None if params is None else params.rated_payload,
             "physics_step": self.physics_step, "servo_rate": self.servo_rate,
             "coordination": self.coordination, "supply_voltage": self.supply_voltage,
             "feedforward": self.feedforward,

@@ -1,8 +1,10 @@
 """``results.json``: the record of one run.
 
 Top level: ``scenario``, ``scheme``, ``solver``, ``model``, ``plant`` (``"kinematic"`` or
-``"dynamic"``) with ``plant_settings`` (its parameter set and source, rates, coordination,
-feed-forward, payload, gains) and ``sensors`` (noise and delay, ``null`` when exact), ``dt`` [s],
+``"dynamic"``) with ``plant_settings`` (its parameter set and source, the arm's rated payload,
+rates, coordination, feed-forward, payload, gains), ``warnings`` (only when a run exceeded a
+rating, e.g. a payload beyond the arm's rated payload: one sentence each) and ``sensors`` (noise
+and delay, ``null`` when exact), ``dt`` [s],
 ``steps``, ``duration`` [s], ``wall_time_s``, ``metrics`` (see
 :mod:`uvms_qp.sim.metrics`; a dynamic run adds :mod:`uvms_qp.sim.dynamic_metrics`), ``phases``
 (metrics per scenario phase), ``events`` (applied run-time changes), ``stopped`` (only when the run
@@ -59,6 +61,7 @@ import pinocchio as pin
 
 from .. import __version__
 from ._files import write_atomic
+from .dynamic_metrics import rating_notes
 
 if TYPE_CHECKING:  # pragma: no cover
     from .runner import SimulationResult
@@ -170,6 +173,9 @@ def results_dict(result: SimulationResult, *, series: bool = True,
         "provenance": provenance(command),
     }
     data["plant_settings"] = result.plant_settings
+    notes = rating_notes(data["metrics"], result.plant_settings)
+    if notes:
+        data["warnings"] = notes
     data["sensors"] = result.sensors
     if result.stopped is not None:
         data["stopped"] = result.stopped

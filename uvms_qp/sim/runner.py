@@ -237,9 +237,9 @@ def _measured_state(model: Any, plant: Any, channel: Any, truth: Any) -> Any:
     nu = plant.body_velocity
     if channel is None:
         return truth if nu is None else model.state(truth.q, nu)
-    q = channel.pose(truth.q)
-    if nu is not None:
-        return model.state(q, channel.body_velocity(nu))
+    q, measured = channel.state(truth.q, nu)
+    if measured is not None:
+        return model.state(q, measured)
     return truth if q is truth.q else model.state(q)
 
 

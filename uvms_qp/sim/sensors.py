@@ -4,14 +4,18 @@ A real UVMS measures its pose with a navigation filter (DVL, IMU, depth, USBL) a
 angles with encoders; both arrive noisy and late. :class:`Sensors` models that between the plant
 and the controller:
 
-- **pose**: every control period, the controller is given the true configuration of ``delay``
-  seconds earlier (rounded to whole control periods: the states the loop keeps) with independent
-  Gaussian noise added to the world position of the vehicle (``position_noise`` [m] per axis),
-  its roll, pitch and yaw (``attitude_noise`` [rad] per angle) and each joint angle
-  (``joint_noise`` [rad]);
-- **velocity** (dynamic plant only): the vehicle's body velocity read by the velocity loop and
-  by arm-vehicle coordination gets Gaussian noise of ``linear_rate_noise`` [m/s] on ``u, v, w``
-  and ``angular_rate_noise`` [rad/s] on ``p, q, r``.
+- **the controller's state**: every control period, the controller is given the true state of
+  ``delay`` seconds earlier (rounded to whole control periods: the states the loop keeps), its
+  configuration and (dynamic plant) the vehicle's body velocity of that same instant: a
+  navigation solution arrives late as a whole. Independent Gaussian noise is added to the world
+  position of the vehicle (``position_noise`` [m] per axis), its roll, pitch and yaw
+  (``attitude_noise`` [rad] per angle), each joint angle (``joint_noise`` [rad]) and the body
+  velocity (``linear_rate_noise`` [m/s] on ``u, v, w``, ``angular_rate_noise`` [rad/s] on
+  ``p, q, r``); arm-vehicle coordination uses that velocity;
+- **the velocity loop's rates** (dynamic plant only): the vehicle's velocity loop, at the servo
+  rate, reads the body velocity with the same rate noise and *no* delay: an inner loop closed on
+  the rate sensors (DVL, gyroscopes), not on the navigation solution. ``delay`` does not apply to
+  it.
 
 The noise comes from one generator seeded with ``seed``, so a run is repeated exactly. With every
 figure zero (the default) the controller sees the true state and no random number is drawn.
@@ -41,8 +45,9 @@ class Sensors:
         joint_noise: Standard deviation of each joint position [rad or m] (>= 0).
         linear_rate_noise: Standard deviation of ``u, v, w`` [m/s] (>= 0, dynamic plant).
         angular_rate_noise: Standard deviation of ``p, q, r`` [rad/s] (>= 0, dynamic plant).
-        delay: Age of the pose the controller receives [s] (>= 0), rounded to whole control
-            periods.
+        delay: Age of the state the controller receives [s] (>= 0), rounded to whole control
+            periods: its configuration and body velocity, both of that earlier instant (the
+            velocity loop's rates are not delayed).
         seed: Seed of the noise generator.
     """
 
@@ -92,7 +97,8 @@ class MeasurementChannel:
         self.model = model
         self._rng = np.random.default_rng(sensors.seed)
         self._delay = sensors.delay_steps(dt)
-        self._past: deque[FloatArray] = deque(maxlen=self._delay + 1)
+        self._past: deque[tuple[FloatArray, FloatArray | None]] = deque(
+            maxlen=self._delay + 1)
         kind = getattr(model, "vehicle_kind", "fixed")
         size = int(getattr(model, "eta_size", 0))
         sigma = np.zeros(size)
@@ -106,16 +112,36 @@ class MeasurementChannel:
         self._rate_sigma = np.array([sensors.linear_rate_noise] * 3
                                     + [sensors.angular_rate_noise] * 3)
 
+    def state(self, q: FloatArray, nu: FloatArray | None = None
+              ) -> tuple[FloatArray, FloatArray | None]:
+        """The configuration and body velocity the controller receives, once per control period.
+
+        Args:
+            q: The plant's true configuration (nq,).
+            nu: The vehicle's true body velocity (6,) [m/s, rad/s] (FRD), None on a plant
+                without one (kinematic).
+
+        Returns:
+            ``(q, nu)`` as measured: the true ones themselves when the sensors are exact; else
+            both of ``delay`` periods ago (the oldest kept while fewer have passed), with noise
+            on ``eta``, the joints and ``nu`` (None stays None).
+        """
+        s = self.sensors
+        if s.pose_is_exact:
+            return q, (None if nu is None else self.body_velocity(nu))
+        self._past.append((np.array(q, dtype=np.float64),
+                           None if nu is None else np.array(nu, dtype=np.float64)))
+        old, old_nu = self._past[0]
+        return self._noisy_pose(old), (None if old_nu is None else self.body_velocity(old_nu))
+
     def pose(self, q: FloatArray) -> FloatArray:
         """The configuration the controller receives when the plant is at ``q`` (nq,).
 
-        The true ``q`` itself when the sensors are exact; else the configuration of ``delay``
-        periods ago (the oldest kept while fewer have passed) with noise on ``eta`` and joints.
+        :meth:`state` without a velocity: call one of the two once per control period.
         """
-        if self.sensors.pose_is_exact:
-            return q
-        self._past.append(np.array(q, dtype=np.float64))
-        old = self._past[0]
+        return self.state(q)[0]
+
+    def _noisy_pose(self, old: FloatArray) -> FloatArray:
         s = self.sensors
         if not (s.position_noise or s.attitude_noise or s.joint_noise):
             return old
@@ -130,7 +156,10 @@ class MeasurementChannel:
         return np.asarray(model.configuration(eta, joints), dtype=np.float64)
 
     def body_velocity(self, nu: FloatArray) -> FloatArray:
-        """The body velocity (6,) [m/s, rad/s] the velocity loop reads when the true one is nu."""
+        """The body velocity (6,) [m/s, rad/s] read when the true one is ``nu``: noise, no delay.
+
+        What the velocity loop reads at every servo tick (:meth:`state` delays the controller's).
+        """
         if self.sensors.velocity_is_exact:
             return nu
         return nu + self._rng.standard_normal(6) * self._rate_sigma

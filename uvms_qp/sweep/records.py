@@ -26,9 +26,12 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from ..hqp.linalg import one_blas_thread
+from ..model import model_names
+from ..sim.model_file import register_model_file
 from ..sim.runner import simulate
 from .outcome import run_outcome
 from .realise import realise
@@ -38,6 +41,8 @@ from .spec import SweepSpec
 #: Statuses of a record.
 STATUSES = ("ok", "stopped", "error", "lost")
 _LOCK = threading.Lock()
+#: Model files this process registered, with their model's name.
+_REGISTERED: dict[Path, str] = {}
 
 
 @dataclass(frozen=True)
@@ -72,6 +77,17 @@ def judge(spec: SweepSpec, record: dict[str, Any]) -> None:
     record["success"] = record["status"] == "ok" and not failed
 
 
+def register_model_files(paths: tuple[Path, ...]) -> None:
+    """Register the models of ``paths`` in this process, each file once.
+
+    A worker process does not inherit the models its parent registered (a forkserver or a Dask
+    worker starts from a fresh import), so each registers the sweep's model files itself.
+    """
+    for path in paths:
+        if _REGISTERED.get(path) not in model_names():
+            _REGISTERED[path] = register_model_file(path, replace=True)
+
+
 def simulate_run(spec: SweepSpec, seed: int, parameters: dict[str, Any] | None = None
                  ) -> tuple[dict[str, Any], Any]:
     """Draw, build and simulate the run of seed ``seed``: its parameters and its result.
@@ -85,6 +101,7 @@ def simulate_run(spec: SweepSpec, seed: int, parameters: dict[str, Any] | None =
         seed: The run's seed.
         parameters: The run's draws, when already made (``draw(spec.variables, seed)``).
     """
+    register_model_files(spec.model_files)
     if parameters is None:
         parameters = draw(spec.variables, seed)
     with one_blas_thread:

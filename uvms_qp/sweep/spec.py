@@ -144,6 +144,8 @@ class SweepSpec:
         variables: What the runs draw, in file order.
         criteria: The success criteria (a run also fails when it raised or stopped early).
         source: The sweep file, or None.
+        model_files: Model files (TOML, see docs/models.md) each process registers before its
+            first run, for a base scenario that names a model of such a file (``--model-path``).
     """
 
     name: str
@@ -158,6 +160,7 @@ class SweepSpec:
     variables: tuple[Variable, ...]
     criteria: tuple[Criterion, ...]
     source: Path | None = None
+    model_files: tuple[Path, ...] = ()
 
     @property
     def varied(self) -> tuple[Variable, ...]:
@@ -175,6 +178,20 @@ class SweepSpec:
             ConfigError: not a positive integer of at most :data:`MAX_RUNS`, at ``path``.
         """
         return dataclasses.replace(self, runs=_check_runs(runs, path))
+
+    def with_model_files(self, paths: Any) -> SweepSpec:
+        """This sweep with the model files its runs register first (absolute paths).
+
+        Raises:
+            ConfigError: a path that is not a file (``--model-path``).
+        """
+        files = []
+        for path in paths:
+            path = Path(path).resolve()
+            if not path.is_file():
+                raise ConfigError(f"no model file {str(path)!r}", "--model-path")
+            files.append(path)
+        return dataclasses.replace(self, model_files=tuple(files))
 
     def digest(self) -> str:
         """A fingerprint of what decides each run (everything but the number of runs).

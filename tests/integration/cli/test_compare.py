@@ -26,12 +26,25 @@ def test_compare_writes_results_table_and_figures(tmp_path):
         assert len(data["series"]["time"]) == data["steps"] + 1
     table = json.loads((out / "comparison.json").read_text())
     assert table["schemes"] == schemes
+    assert table["plants"] == ["kinematic"] * 3
+    assert "| plant |  | kinematic | kinematic | kinematic |" in (out / "comparison.md").read_text()
     moved = table["metrics"]["vehicle_displacement_max"]["values"]
     assert moved[1] == 0.0 and moved[2] > 0.05
     assert "| vehicle_displacement_max | m |" in (out / "comparison.md").read_text()
     for figure in ("vehicle_pose.png", "joints.png", "rates.png", "configurations.png",
                    "manipulability_tracking.png", "tool_tracking.png"):
         assert (out / figure).stat().st_size > 1000
+
+
+def test_compare_on_the_dynamic_plant_says_so_in_its_table(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", "bluerov2_demo", "--plant", "dynamic", "--duration", "0.5",
+                 "--out", str(out), "--no-plots"]) == 0
+    assert json.loads((out / "comparison.json").read_text())["plants"] == ["dynamic"]
+    assert json.loads((out / "hqp" / "results.json").read_text())["plant"] == "dynamic"
+    assert "| plant |  | dynamic |" in (out / "comparison.md").read_text()
+    assert any(line.split()[1:3] == ["plant", "\u2502"] and "dynamic" in line
+               for line in capsys.readouterr().out.splitlines())
 
 
 def test_compare_rejects_a_scheme_the_scenario_does_not_name(tmp_path, capsys):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import json
+import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -61,3 +63,49 @@ def test_a_bad_sweep_file_exits_2_with_one_line_before_any_run(tmp_path, capsys)
     assert err == ("uvms-qp sweep: error: current.speed: a current speed [m/s] must be >= 0, "
                    "but the spread -0.2 reaches -0.2\n")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_model_file_named_on_the_command_line_reaches_every_worker(tmp_path, capsys):
+    """Each worker process registers the ``--model-path`` files itself: a forkserver or Dask
+    worker does not inherit the models its parent registered."""
+    from uvms_qp.model import unregister_model
+
+    data = Path(__file__).resolve().parents[2] / "data"
+    (tmp_path / "rov.toml").write_text(textwrap.dedent("""
+        model = "holdout_rov"
+        dt = 0.1
+        duration = 0.3
+
+        [initial]
+        joints = [0.0, 0.6, 1.2]
+
+        [[levels]]
+        [[levels.tasks]]
+        type = "end_effector"
+        name = "tool"
+        position = [0.5707, 0.0, -0.1498]
+    """))
+    path = write_sweep(tmp_path, runs=2, text="""
+        scenario = "rov.toml"
+        runs = {runs}
+        seed = 3
+
+        [initial]
+        joints = {{ uniform = [-0.05, 0.05] }}
+
+        [success]
+        ee_error_max = {{ max = 1.0 }}
+    """)
+    out = tmp_path / "out"
+    try:
+        assert main(["sweep", str(path), "--out", str(out), "--workers", "2", "--no-plots",
+                     "--model-path", str(data / "holdout_rov.toml")]) == 0
+    finally:
+        unregister_model("holdout_rov")
+    printed = capsys.readouterr().out
+    records = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    assert "success: 2/2" in printed, records[0]["error"]
+    records = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    assert [r["status"] for r in records] == ["ok", "ok"]
+    assert main(["sweep", str(path), "--out", str(out)]) == 2
+    assert "unknown model 'holdout_rov'" in capsys.readouterr().err

@@ -69,6 +69,15 @@ def test_arm_totals_and_split_by_length(rov, heavy):
         assert b.mass / ARM_MASS == pytest.approx(lengths[joint] / sum(lengths.values()))
 
 
+def test_both_sets_carry_the_arm_s_rated_payload_and_it_survives_a_copy(heavy, wu):
+    import pickle
+
+    # the vendor's figure: about 2 kg at full reach (mass in air)
+    assert heavy.rated_payload == 2.0 and wu.rated_payload == 2.0
+    assert pickle.loads(pickle.dumps(heavy)).rated_payload == 2.0
+    assert heavy.with_changes(rated_payload=3.0) != heavy
+
+
 def test_link_centres_are_midway_between_consecutive_joints_in_the_world(rov, heavy):
     q = rov.home()
     frames = ["m2_1_1_link", "m2_joint_link", "m2_1_2_link", "m1_link", "tool"]

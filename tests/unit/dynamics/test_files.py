@@ -59,6 +59,14 @@ def test_the_documented_example_loads_and_drives_a_plant(rov):
     assert np.isfinite(v_dot).all()
 
 
+def test_a_file_states_its_arm_s_rated_payload_or_keeps_its_base_s(tmp_path):
+    assert load_plant_parameters(write(tmp_path, full_file())).rated_payload is None
+    assert load_plant_parameters(write(tmp_path, full_file(rated_payload=4.5))).rated_payload \
+        == 4.5
+    based = 'name = "x"\nbase = "bluerov2_wu_2018"\n'
+    assert load_plant_parameters(write(tmp_path, based)).rated_payload == 2.0
+
+
 def test_a_complete_file_needs_no_base(tmp_path, rov):
     params = load_plant_parameters(write(tmp_path, full_file(water_density=1025.0)))
     assert params.vehicle.mass == 13.5 and params.water_density == 1025.0
@@ -88,6 +96,7 @@ def test_a_complete_file_needs_no_base(tmp_path, rov):
     (full_file().replace("quadratic_damping = [141.0, 217.0, 190.0, 1.19, 0.47, 1.5]", ""),
      "vehicle.quadratic_damping", "missing"),
     (full_file(joint_servo_time_constant=0.0), "joint_servo_time_constant", "> 0"),
+    (full_file(rated_payload=-2.0), "rated_payload", "> 0"),
     (full_file().replace('name = "mine"', ""), "name", "missing"),
     ('name = "x"\nbase = "nope"\n', "base", "unknown plant parameter set"),
     ('name = "x"\nbase = "bluerov2_wu_2018"\n[links.axis_b]\nvolume = -1.0\n',

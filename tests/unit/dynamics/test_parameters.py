@@ -76,6 +76,7 @@ def test_rigid_inertia_is_the_spatial_inertia_at_the_origin():
     (dict(joint_servo_time_constant=0.0), "joint_servo_time_constant", "> 0"),
     (dict(water_density=-1.0), "water_density", ">= 0"),
     (dict(gravity=float("inf")), "gravity", "finite"),
+    (dict(rated_payload=0.0), "rated_payload", "> 0"),
 ])
 def test_a_bad_plant_value_names_its_path(changes, path, words):
     with pytest.raises(ParameterError, match=words) as info:

@@ -189,6 +189,21 @@ def test_feed_forward_of_restoring_and_damping_at_rest_error():
     assert calls[0] is q
 
 
+def test_told_the_water_the_damping_is_fed_forward_at_the_relative_velocity():
+    # the plant's damping acts on the velocity relative to the water: holding station in a
+    # head current needs the drag of the current, which the loop feeds forward when told it
+    loop = VelocityLoop(np.full(6, 7.0), np.full(6, 3.0), dt=DT, linear_damping=LINEAR,
+                        quadratic_damping=QUADRATIC)
+    nu_ref = np.array([0.3, -0.1, 0.05, 0.0, 0.02, -0.2])
+    water = np.array([-0.2, 0.1, 0.0, 0.0, 0.0, 0.0])  # body frame [m/s]
+    relative = nu_ref - water
+    wrench = loop.step(nu_ref, nu_ref, water=water)  # no error: feed-forward only
+    np.testing.assert_allclose(wrench, (LINEAR + QUADRATIC * np.abs(relative)) * relative)
+    # not told the water: still water is assumed
+    np.testing.assert_allclose(loop.step(nu_ref, nu_ref),
+                               (LINEAR + QUADRATIC * np.abs(nu_ref)) * nu_ref)
+
+
 def test_reset_clears_the_integral():
     loop = default_loop()
     loop.step([0.1, 0, 0, 0, 0, 0], np.zeros(6))

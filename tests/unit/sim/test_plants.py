@@ -184,6 +184,29 @@ def test_the_payload_of_a_plant_table_is_attached_at_its_time():
     assert torque[t > 0.35].max() > torque[t < 0.2].max()
 
 
+@pytest.mark.parametrize("mass", [1.5, 2.5])
+def test_a_payload_beyond_the_arm_s_rating_is_reported_not_refused(tmp_path, capsys, mass):
+    # the bundled arm is rated 2 kg at full reach: 2.5 kg is flagged, 1.5 kg is not
+    path = tmp_path / "s.toml"
+    path.write_text(bluerov_scenario("duration = 0.2", '\n[plant]\ntype = "dynamic"\n'
+                                     f'[plant.payload]\ntime = 0.1\nmass = {mass}\n'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--no-plots"]) == 0
+    printed = capsys.readouterr()
+    record = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert record["plant_settings"]["rated_payload"] == 2.0
+    assert record["metrics"]["payload_mass"] == mass
+    assert record["metrics"]["payload_rating_share"] == pytest.approx(mass / 2.0)
+    assert record["steps"] == 2 and record.get("stopped") is None
+    assert set(record["metrics"]["joint_torque_max"]) == {"axis_e", "axis_d", "axis_c", "axis_b"}
+    assert "payload_rating_share" in printed.out
+    flagged = "warning: the payload of 2.5 kg exceeds the arm's rated payload of 2 kg"
+    if mass > 2.0:
+        assert flagged in printed.err and record["warnings"] == [printed.err.split(
+            "warning: ")[-1].strip()]
+    else:
+        assert "warning" not in printed.err and "warnings" not in record
+
+
 def test_scenario_build_takes_a_plant_and_sensors():
     sc = scenario()
     spec = sc.plant.as_kind("dynamic", sc.model)
@@ -269,3 +292,24 @@ def test_a_slowly_varying_current_reaches_the_dynamic_plant():
     np.testing.assert_allclose(water.velocity(5.0), 0.3 * np.array([np.cos(0.5), np.sin(0.5),
                                                                     0.0]))
     assert sc.current.oscillation == 0.1
+
+
+@pytest.mark.parametrize(("feedforward", "share"), [("model", (0.0, 0.1)),
+                                                     ("nominal", (0.8, 1.2))])
+def test_only_the_feed_forward_told_the_current_holds_its_drag(feedforward, share):
+    # station in a 0.3 m/s head current: the vehicle's drag is (D_l + D_q |u_r|) u_r at the
+    # relative surge u_r = 0.3 m/s; the model feed-forward is told the current and carries it,
+    # the nominal one is not and its integral must
+    sc = scenario(f'\n[current]\ndirection = 3.14159\nspeed = 0.3\n'
+                  f'[plant]\ntype = "dynamic"\nfeedforward = "{feedforward}"\n')
+    plant = sc.make_plant()
+    plant.start(sc.q0)
+    body = plant.spec.parameters.vehicle
+    drag = body.linear_damping[0] * 0.3 + body.quadratic_damping[0] * 0.09
+    t = 0.0
+    for _ in range(60):  # 6 s holding station
+        plant.advance(np.zeros(10), t)
+        t += sc.dt
+    assert abs(plant.body_velocity[0]) < 1e-3
+    integral = (plant.loop.ki * plant.loop.integral)[0]
+    assert share[0] * drag <= integral <= share[1] * drag

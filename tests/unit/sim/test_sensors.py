@@ -11,7 +11,7 @@ import pytest
 from tests.support.scenario_text import bluerov_scenario
 from uvms_qp import load_model
 from uvms_qp.errors import ConfigError, InputError
-from uvms_qp.sim.runner import simulate
+from uvms_qp.sim.runner import _measured_state, simulate
 from uvms_qp.sim.scenario import scenario_from_dict
 from uvms_qp.sim.sensors import Sensors
 
@@ -38,6 +38,32 @@ def test_a_delay_gives_the_configuration_of_that_many_periods_ago():
     seen = [channel.pose(q) for q in qs]
     for k, q in enumerate(seen):
         np.testing.assert_array_equal(q, qs[max(0, k - 3)])
+
+
+def test_a_delay_gives_the_configuration_and_velocity_of_one_same_earlier_instant():
+    channel = Sensors(delay=0.2).channel(MODEL, 0.1)
+    qs = configurations(6)
+    nus = [np.full(6, float(k)) for k in range(6)]
+    for k, (q, nu) in enumerate(zip(qs, nus, strict=True)):
+        seen_q, seen_nu = channel.state(q, nu)
+        np.testing.assert_array_equal(seen_q, qs[max(0, k - 2)])
+        np.testing.assert_array_equal(seen_nu, nus[max(0, k - 2)])
+
+
+def test_the_controller_s_measured_state_is_delayed_whole_and_the_loop_s_rates_are_not():
+    class Plant:  # what the runner reads of a dynamic plant: its true body velocity
+        body_velocity = np.zeros(6)
+
+    channel = Sensors(delay=0.1).channel(MODEL, 0.1)
+    plant = Plant()
+    qs = configurations(3)
+    for k, q in enumerate(qs):
+        plant.body_velocity = np.full(6, 0.1 * k)
+        state = _measured_state(MODEL, plant, channel, MODEL.state(q))
+        np.testing.assert_array_equal(state.q, qs[max(0, k - 1)])
+        np.testing.assert_array_equal(state.velocity, np.full(6, 0.1 * max(0, k - 1)))
+    # the velocity loop's reading: the current velocity (noise only)
+    np.testing.assert_array_equal(channel.body_velocity(plant.body_velocity), np.full(6, 0.2))
 
 
 def test_pose_noise_has_the_stated_standard_deviation_and_joints_stay_in_their_limits():

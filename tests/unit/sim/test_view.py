@@ -119,6 +119,15 @@ def test_view_figure_animates_every_part_up_to_the_last_state(demo):
 
 
 @needs_plotly
+def test_view_title_says_which_plant_ran(demo, tmp_path):
+    model, result = demo
+    assert "on the kinematic plant" in view_figure(model, result, max_frames=2).layout.title.text
+    scenario = load_scenario(short_steps("bluerov2_demo", 4, tmp_path)).with_plant("dynamic")
+    dynamic = simulate(scenario)
+    assert "on the dynamic plant" in view_figure(model, dynamic, max_frames=2).layout.title.text
+
+
+@needs_plotly
 def test_view_refuses_a_result_of_another_model(demo):
     _, result = demo
     with pytest.raises(InputError, match="soylu_planar"):

@@ -124,6 +124,21 @@ def test_a_dask_cluster_gives_the_same_records_as_the_local_pool(reference, tmp_
     assert comparable(outcome.records) == comparable(expected)
 
 
+def test_a_dask_worker_killed_mid_sweep_costs_nothing_but_its_runs(reference, tmp_path):
+    """Dask reschedules a dead worker's runs on the survivors (its nanny restarts the dead one)."""
+    distributed = pytest.importorskip("distributed")
+    spec, expected = reference
+    marker = tmp_path / "killed"
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        outcome = run_sweep(spec, tmp_path / "out", scheduler=cluster.scheduler_address,
+                            execute=KillOnce(index=2, marker=str(marker)))
+    assert marker.exists()  # a worker did die
+    lines = (tmp_path / "out" / "runs.jsonl").read_text().splitlines()
+    assert sorted(json.loads(line)["index"] for line in lines) == list(range(spec.runs))
+    assert comparable(outcome.records) == comparable(expected)
+
+
 def test_an_unreachable_scheduler_fails_before_any_run(tiny, tmp_path, monkeypatch):
     monkeypatch.setattr(executors, "CONNECT_TIMEOUT", 0.5)
     with pytest.raises(ConfigError, match=r"^--scheduler: cannot reach the Dask scheduler at "

@@ -221,8 +221,9 @@ def view_figure(model: Any, result: SimulationResult, *, max_frames: int = MAX_F
              "mode": "immediate"}
     fig = go.Figure(data=traces, frames=frames)
     fig.update_layout(
-        title={"text": f"{result.scenario}: {model.name}, {result.scheme} "
-                       f"({result.solver}), {result.steps} steps of {result.dt:g} s"},
+        title={"text": f"{result.scenario}: {model.name} on the {result.plant} plant, "
+                       f"{result.scheme} ({result.solver}), {result.steps} steps of "
+                       f"{result.dt:g} s"},
         scene=layout_scene,
         margin={"l": 0, "r": 0, "t": 40, "b": 0},
         legend={"x": 0.0, "y": 0.95},
