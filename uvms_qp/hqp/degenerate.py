@@ -125,8 +125,11 @@ class Reduction:
         for m in problem.sizes:
             sizes.append(int((~drop[start: start + m]).sum()))
             start += m
+        # ``sides[:, rows]`` comes out column-major; its rows (``lo``, ``hi``) must be
+        # contiguous, because a back-end reads them in place on every later solve
         self.problem = Problem(problem.n, problem.mh, sizes, problem.W,
-                               A=problem.A[self.rows], sides=problem.sides[:, self.rows],
+                               A=problem.A[self.rows],
+                               sides=np.ascontiguousarray(problem.sides[:, self.rows]),
                                w=problem.w[self.wrows])
         self.version = problem.weights_version
 

@@ -133,6 +133,11 @@ class Problem:
             sides[0], sides[1] = -np.inf, np.inf
         if not A.flags.c_contiguous:  # read in place through flat views (checks, DAQP)
             raise InputError("A: expected a C-contiguous array (the problem's own buffer)")
+        if not (sides[0].flags.c_contiguous and sides[1].flags.c_contiguous):
+            # DAQP reads lo and hi in place on every solve after its set-up: a strided side
+            # would be copied once at the set-up and every later solve would see those values
+            raise InputError("sides: expected rows that are C-contiguous (the problem's own "
+                             "buffer)")
         self.A, self.sides = A, sides
         self.box = sides[:, :n]
         self.flat_rows = A[n:].reshape(-1)

@@ -304,3 +304,13 @@ def test_round_off_outside_the_box_is_clipped_exactly():
     result = solver.solve_problem(problem)
     assert result.ok and result.info["rho_soft"] == 1e-8  # accepted at once
     assert result.x[0] == 1.0 and result.x[1] == -1.0 and result.hard_violation == 0.0
+
+
+def test_the_binding_refuses_sides_it_would_have_to_copy():
+    # a copy made at the set-up would be what every later refresh re-reads
+    H, f, A, bu, bl, sense, bp = _hierarchy(np.random.default_rng(3), 4, (2,), 1.0)
+    sides = np.asfortranarray(np.vstack((bl, bu)))
+    with pytest.raises(ValueError, match="blower"):
+        NativeDaqp().setup(H, f, A, bu, sides[0], sense, bp)
+    with pytest.raises(ValueError, match="A"):
+        NativeDaqp().setup(H, f, np.asfortranarray(A), bu, bl, sense, bp)

@@ -7,7 +7,10 @@ import pytest
 from tests.support.oracle.lexicographic import Oracle, first_wrong
 from uvms_qp.bench.problems import family
 from uvms_qp.hqp import HierarchySolver
-from uvms_qp.hqp.degenerate import dependent_rows, reduce_levels
+from uvms_qp.hqp.backends.daqp import DaqpBackend
+from uvms_qp.hqp.degenerate import Reduction, dependent_rows, reduce_levels
+from uvms_qp.hqp.problem import Problem
+from uvms_qp.hqp.registry import get_spec
 from uvms_qp.rows import Rows
 
 
@@ -80,3 +83,26 @@ def test_daqp_on_reduced_problems_passes_the_oracle(fam):
         res = HierarchySolver("daqp").solve(levels, lor[:n], hir[:n])
         assert res.status.value == "optimal"
         assert first_wrong(Oracle(*arr).judge(res.x)) is None, p.name
+
+
+def test_daqp_solves_a_reduced_problem_on_its_current_sides_tick_after_tick():
+    # level 1 repeats level 0's row (left out by the reduction); the box moves between solves,
+    # as a command-rate window does: every solve must see the box of its own tick
+    problem = Problem(2, 0, (1, 1, 1))
+    problem.A[2:] = [[0.0, 1.0], [0.0, 1.0], [1.0, 0.0]]
+    problem.lo[2:] = problem.hi[2:] = [5.0, 3.0, 1.0]
+    backend = DaqpBackend(get_spec("daqp"))
+    assert backend.reduce(problem)
+    for upper in (10.0, 0.5, 0.25, 10.0):
+        problem.lo[:2], problem.hi[:2] = -10.0, [upper, 10.0]
+        answer = backend.solve(problem)
+        assert answer.status.value == "optimal", answer.message
+        np.testing.assert_allclose(answer.x, [min(upper, 1.0), 5.0], atol=1e-9)
+        assert answer.info["iterations"] < 50  # one warm DAQP call, no rho_soft ladder
+
+
+def test_a_reduced_problem_keeps_contiguous_sides():
+    problem = Problem(2, 0, (1, 1))
+    problem.A[2:] = [[0.0, 1.0], [0.0, 2.0]]
+    reduced = Reduction(problem, np.array([False, True])).problem
+    assert reduced.lo.flags.c_contiguous and reduced.hi.flags.c_contiguous

@@ -474,3 +474,12 @@ def test_the_validator_agrees_with_the_item_by_item_check_on_random_input() -> N
         np.testing.assert_array_equal(problem.w, np.concatenate([np.zeros(0), *w]))
         outcomes["solved"] += 1
     assert min(outcomes.values()) > 100, outcomes
+
+
+def test_a_problem_refuses_buffers_a_back_end_cannot_read_in_place():
+    from uvms_qp.hqp.problem import Problem
+
+    with pytest.raises(InputError, match="sides"):
+        Problem(2, 0, (1,), sides=np.asfortranarray(np.zeros((2, 3))))
+    with pytest.raises(InputError, match="A: expected a C-contiguous"):
+        Problem(2, 0, (1,), A=np.asfortranarray(np.zeros((3, 2))))

@@ -338,3 +338,19 @@ def test_alternates_and_construction_errors():
     with pytest.raises(InputError, match="max_fallbacks"):
         SafeSolver("daqp", max_fallbacks=0)
     assert set(STAGES) >= DEGRADED_STAGES
+
+
+def test_a_perturbed_start_of_the_demo_is_answered_by_the_primary(tmp_path):
+    # a sweep's run whose perturbed start and noisy pose make the certificate drop dependent
+    # level rows (the reduced problem DAQP then solves tick after tick) while the
+    # command-rate window moves: every step is the warm-started primary's, none a cold retry
+    from tests.support.sweeps import TINY, write_sweep
+    from uvms_qp.sweep.records import simulate_run
+    from uvms_qp.sweep.sampling import run_seed
+    from uvms_qp.sweep.spec import load_sweep
+
+    spec = load_sweep(write_sweep(tmp_path, text=TINY.replace("duration = 0.25",
+                                                              "duration = 1.0")))
+    _, result = simulate_run(spec, run_seed(spec.seed, 3))
+    counts = result.fallback_metrics()["stage_counts"]
+    assert counts.get("cold_retry", 0) == 0 and counts.get("primary", 0) == 20, counts

@@ -226,8 +226,9 @@ def _contiguous(array: Any, dtype: Any) -> np.ndarray:
 class NativeDaqp:
     """A DAQP workspace driven through its C API (see the module docstring).
 
-    Arrays passed to :meth:`setup` are used in place when they are C-contiguous of the right
-    type (float64, or C int for ``sense`` and ``break_points``).
+    The rows and sides passed to :meth:`setup` are used in place (C-contiguous float64, else
+    refused: :meth:`refresh` re-reads them); ``H``, ``f``, ``sense`` and ``break_points`` are
+    copied when not C-contiguous of the right type (float64, C int).
 
     Args:
         lib: The loaded library (default: DAQP's extension, its version checked).
@@ -275,9 +276,20 @@ class NativeDaqp:
     def setup(self, H: FloatArray, f: FloatArray, A: FloatArray, bupper: FloatArray,
               blower: FloatArray, sense: np.ndarray, break_points: np.ndarray
               ) -> tuple[int, float]:
-        """``daqp.Model.setup`` on arrays kept in place; returns ``(flag, setup_time)``."""
-        H, f, A = _contiguous(H, np.float64), _contiguous(f, np.float64), _contiguous(A, np.float64)
-        bu, bl = _contiguous(bupper, np.float64), _contiguous(blower, np.float64)
+        """``daqp.Model.setup`` on arrays kept in place; returns ``(flag, setup_time)``.
+
+        Raises:
+            ValueError: ``A``, ``bupper`` or ``blower`` is not C-contiguous float64: later
+                refreshes re-read them in place, so a copy made here would hand DAQP the
+                set-up's values on every later solve.
+        """
+        for name, array in (("A", A), ("bupper", bupper), ("blower", blower)):
+            if not (isinstance(array, np.ndarray) and array.dtype == np.float64
+                    and array.flags.c_contiguous):
+                raise ValueError(f"DAQP set-up: {name} must be a C-contiguous float64 array "
+                                 "(DAQP re-reads it in place)")
+        H, f = _contiguous(H, np.float64), _contiguous(f, np.float64)
+        bu, bl = bupper, blower
         sense = _contiguous(sense, np.intc)
         bp = _contiguous(break_points, np.intc)
         n, m = f.shape[0], bu.shape[0]
