@@ -76,20 +76,26 @@ from dataclasses import dataclass
 from time import perf_counter
 
 import numpy as np
-from scipy.linalg import lapack
 
 from .._validation import FloatArray
+from .linalg import absolute as _absolute
+from .linalg import add as _add
+from .linalg import divide as _divide
+from .linalg import dot as _dot
+from .linalg import gesdd as _GESDD
+from .linalg import greater_equal as _greater_equal
+from .linalg import less_equal as _less_equal
+from .linalg import logical_or as _logical_or
+from .linalg import max_of as _max
+from .linalg import maximum as _maximum
+from .linalg import minimum as _minimum
 from .linalg import one_blas_thread
+from .linalg import potrf as _POTRF
+from .linalg import sqrt as _sqrt
+from .linalg import subtract as _subtract
 from .problem import Problem
 from .tolerances import ACTIVE_TOL, RANK_ATOL, RANK_RTOL
 
-_GESDD = lapack.dgesdd
-_POTRF = lapack.dpotrf
-_absolute, _add, _divide, _dot, _sqrt, _subtract = (
-    np.absolute, np.add, np.divide, np.dot, np.sqrt, np.subtract)
-_greater_equal, _less_equal, _logical_or = np.greater_equal, np.less_equal, np.logical_or
-_maximum, _minimum = np.maximum, np.minimum
-_max = np.maximum.reduce
 #: Sets of active rows whose screen structure a problem keeps (the last few).
 _KEEP = 8
 

@@ -9,6 +9,10 @@ degenerate shapes itself and refuses non-finite input before the native code see
 ``tests/unit/hqp/test_linalg.py`` holds the cases; :mod:`uvms_qp.testing.fuzz` feeds the
 certificate, the repair and the damping screen degenerate problems in child processes and
 counts aborts.
+
+It also holds the layer's kernels: the numpy ufuncs and reductions its hot loops call, bound
+once, and the two LAPACK routines the damping screen calls directly (``gesdd``, ``potrf``) on
+the rows of a validated problem, which are finite by construction.
 """
 
 from __future__ import annotations
@@ -18,9 +22,30 @@ import threading
 from typing import Any
 
 import numpy as np
+from scipy.linalg import lapack
 from scipy.optimize import nnls as _scipy_nnls
 
 from .._validation import FloatArray
+
+# -- Kernels of the solve path's hot loops, bound once -----------------------------------------
+# The solve path calls numpy's ufuncs and reductions on arrays of tens of entries, where the
+# interpreter's lookups cost as much as the arithmetic: each module of the layer takes these
+# names from here (``from .linalg import absolute as _absolute``) instead of binding its own.
+# They are numpy's and LAPACK's own callables, not re-implementations;
+# ``tests/unit/hqp/test_linalg.py`` checks each against the plain numpy form it stands for.
+absolute, add, divide, dot, multiply = np.absolute, np.add, np.divide, np.dot, np.multiply
+sqrt, square, subtract = np.sqrt, np.square, np.subtract
+maximum, minimum = np.maximum, np.minimum
+greater_equal, less_equal, logical_or = np.greater_equal, np.less_equal, np.logical_or
+#: ``np.max``/``np.min`` without their Python wrappers (``initial=``, ``where=`` and ``axis=``
+#: as the ufunc's ``reduce`` takes them).
+max_of, min_of = np.maximum.reduce, np.minimum.reduce
+#: The largest entry of each segment ``a[starts[i]:starts[i+1]]`` (``np.maximum.reduceat``).
+segment_max = np.maximum.reduceat
+#: LAPACK's divide-and-conquer SVD (``dgesdd``) and Cholesky factorisation (``dpotrf``), called
+#: without SciPy's wrappers: finite input only (a validated problem's rows; the fuzz harness
+#: drives the damping screen on degenerate levels).
+gesdd, potrf = lapack.dgesdd, lapack.dpotrf
 
 
 def nnls(A: FloatArray, b: FloatArray, maxiter: int | None = None) -> tuple[FloatArray, float]:

@@ -33,6 +33,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validation import FloatArray
+from .linalg import minimum as _minimum
+from .linalg import multiply as _multiply
+from .linalg import subtract as _subtract
 from .problem import Problem
 from .result import OK_STATUSES, HierarchyResult, Status
 from .tolerances import HARD_TOL, LEVEL_TOL
@@ -52,7 +55,6 @@ Certify = Callable[[Problem, FloatArray, FloatArray, list[float], float, list[fl
 _OPTIMAL = Status.OPTIMAL
 _SQRT = math.sqrt
 _INF = math.inf
-_minimum, _subtract, _multiply = np.minimum, np.subtract, np.multiply
 
 Measured = tuple[FloatArray, FloatArray, list[float]]
 """``(s, x_clipped, squares)``: slacks at x, x clipped into the box (a view of a fresh array),

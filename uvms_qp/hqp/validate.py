@@ -42,6 +42,8 @@ import numpy as np
 from .._validation import FloatArray, as_array, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
 from ..rows import Rows
+from .linalg import max_of as _MAX
+from .linalg import min_of as _MIN
 from .problem import Problem
 
 _Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]
@@ -49,8 +51,6 @@ _Parsed = tuple[list[FloatArray], list[FloatArray], list[FloatArray], list[Float
                 int, list[int]]
 """Rows, lower sides, upper sides and weights of every item (hard items first), the number of
 hard items and the level sizes."""
-_MIN = np.minimum.reduce
-_MAX = np.maximum.reduce
 _F64 = np.dtype(np.float64)
 
 MAX_MAGNITUDE = 1e15

@@ -8,6 +8,7 @@ import pytest
 from scipy.optimize import nnls as scipy_nnls
 from threadpoolctl import ThreadpoolController
 
+from uvms_qp.hqp import linalg
 from uvms_qp.hqp.linalg import OneBlasThread, nnls, one_blas_thread
 
 
@@ -73,3 +74,62 @@ def test_one_blas_thread_holds_in_a_thread_of_its_own():
     assert [set(counts) <= {1} for counts in seen[:2]] == [True, True]
     assert seen[2] == before
     assert blas_threads() == before
+
+
+# ---- the kernels the layer's hot loops take from here, against the plain numpy forms
+
+
+def test_the_bound_reductions_are_numpy_max_and_min():
+    rng = np.random.default_rng(4)
+    a = rng.standard_normal((5, 7))
+    assert linalg.max_of(a, axis=None) == np.max(a)
+    assert linalg.min_of(a, axis=None) == np.min(a)
+    np.testing.assert_array_equal(linalg.max_of(a, axis=1), np.max(a, axis=1))
+    assert linalg.max_of(np.zeros(0), initial=-1.0) == -1.0
+    finite = np.isfinite(np.array([1.0, np.inf, -3.0]))
+    assert linalg.max_of(np.abs([1.0, np.inf, -3.0]), axis=None, where=finite, initial=0.0) == 3.0
+
+
+def test_segment_max_is_the_largest_entry_of_each_segment():
+    a = np.array([3.0, 1.0, 4.0, 1.0, 5.0, 9.0, 2.0])
+    starts = np.array([0, 2, 3])
+    expected = [max(a[0:2]), max(a[2:3]), max(a[3:])]
+    np.testing.assert_array_equal(linalg.segment_max(a, starts), expected)
+
+
+def test_the_bound_ufuncs_compute_what_numpy_computes():
+    rng = np.random.default_rng(5)
+    x, y = rng.standard_normal(9), rng.standard_normal(9)
+    pairs = {"absolute": (np.abs(x), (x,)), "sqrt": (np.sqrt(np.abs(x)), (np.abs(x),)),
+             "square": (x * x, (x,)), "add": (x + y, (x, y)), "subtract": (x - y, (x, y)),
+             "multiply": (x * y, (x, y)), "divide": (x / y, (x, y)),
+             "maximum": (np.where(x > y, x, y), (x, y)), "minimum": (np.where(x < y, x, y), (x, y)),
+             "greater_equal": (x >= y, (x, y)), "less_equal": (x <= y, (x, y)),
+             "logical_or": ((x > 0) | (y > 0), (x > 0, y > 0)), "dot": (float(x @ y), (x, y))}
+    for name, (expected, args) in pairs.items():
+        np.testing.assert_array_equal(getattr(linalg, name)(*args), expected, err_msg=name)
+
+
+def test_gesdd_gives_numpys_singular_decomposition():
+    rng = np.random.default_rng(6)
+    M = rng.standard_normal((6, 4))
+    u, s, vt, info = linalg.gesdd(M, compute_uv=1, full_matrices=1)
+    assert info == 0
+    np.testing.assert_allclose(s, np.linalg.svd(M, compute_uv=False), rtol=1e-13)
+    sigma = np.zeros((6, 4))
+    sigma[:4, :4] = np.diag(s)
+    np.testing.assert_allclose(u @ sigma @ vt, M, atol=1e-13)
+    np.testing.assert_allclose(linalg.gesdd(M, compute_uv=0)[1], s, rtol=1e-15)
+
+
+def test_potrf_succeeds_exactly_where_numpys_cholesky_does():
+    rng = np.random.default_rng(7)
+    B = rng.standard_normal((4, 4))
+    spd = B @ B.T + 0.1 * np.eye(4)
+    L, info = linalg.potrf(spd.copy(), 1)  # lower
+    assert info == 0
+    np.testing.assert_allclose(np.tril(L), np.linalg.cholesky(spd), rtol=1e-12)
+    indefinite = np.diag([1.0, -1.0, 2.0, 3.0])
+    assert linalg.potrf(indefinite.copy(), 0, 0, 1)[1] != 0  # as the damping screen calls it
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.cholesky(indefinite)

@@ -49,6 +49,8 @@ from ..._validation import FloatArray, as_scalar
 from ...errors import InputError
 from ..degenerate import Reduction, dependent_rows
 from ..hard_set import hard_feasible, polish_hard
+from ..linalg import segment_max as _level_max
+from ..linalg import square as _square
 from ..measure import Measured, measure
 from ..problem import Problem
 from ..registry import SolverSpec
@@ -63,7 +65,6 @@ DAQP_SETTINGS = frozenset((
     "abs_subopt", "sing_tol", "refactor_tol", "time_limit", "eq_reduction", "presolve",
 ))
 
-_square, _level_max = np.square, np.maximum.reduceat
 _SOLVED = (1, 2)
 _OPTIMAL = Status.OPTIMAL
 _STOP = (-1, -7)  # empty hard set, time limit: another rho_soft cannot help
