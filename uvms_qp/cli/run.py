@@ -120,7 +120,6 @@ def dynamic_summary(dynamic: dict[str, Any], kinematic: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate, simulate; write ``results.json`` and the figures into ``args.out``."""
-    from ..sim.dynamic_metrics import rating_notes
     from ..sim.plots import plot_results
     from ..sim.results import write_results
     from ..sim.runner import simulate
@@ -176,8 +175,15 @@ def run(args: argparse.Namespace) -> int:
         print(_summary(result.metrics()))
         if reference is not None:
             print(dynamic_summary(result.metrics(), reference.metrics()))
+    print_warnings(result)
+    return 0
+
+
+def print_warnings(result: Any) -> None:
+    """Print a run's warnings on stderr (non-finite commands; the ``warnings`` of its results)."""
+    from ..sim.dynamic_metrics import rating_notes
+
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
     for note in rating_notes(result.metrics(), result.plant_settings):
         print(f"warning: {note}", file=sys.stderr)
-    return 0

@@ -134,6 +134,7 @@ def _replay(args: argparse.Namespace, spec: Any) -> int:
     from ..sim.results import write_results
     from ..sweep.outcome import run_outcome
     from ..sweep.records import simulate_run
+    from .run import print_warnings
 
     seed = args.replay
     if seed < 0 or seed >= 2**63:
@@ -158,6 +159,7 @@ def _replay(args: argparse.Namespace, spec: Any) -> int:
             print(f"  {criterion.describe():<40} {value} {verdict}")
         if getattr(result, "stopped", None):
             print(f"  stopped early: {result.stopped}")
+    print_warnings(result)
     return 0
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.scenario_text import bluerov_scenario
 from tests.support.sweeps import TINY, write_sweep
 from uvms_qp.cli import main
 from uvms_qp.sweep.sampling import run_seed
@@ -109,3 +110,21 @@ def test_a_model_file_named_on_the_command_line_reaches_every_worker(tmp_path, c
     assert [r["status"] for r in records] == ["ok", "ok"]
     assert main(["sweep", str(path), "--out", str(out)]) == 2
     assert "unknown model 'holdout_rov'" in capsys.readouterr().err
+
+
+def test_replay_prints_the_run_s_warnings_as_run_does(tmp_path, capsys):
+    # the bundled arm is rated 2 kg at full reach: a 3 kg payload is flagged, as by `uvms-qp run`
+    (tmp_path / "base.toml").write_text(bluerov_scenario(
+        "duration = 0.2", '\n[plant]\ntype = "dynamic"\n'
+        '[plant.payload]\ntime = 0.1\nmass = 1.0\n'))
+    path = tmp_path / "heavy.toml"
+    path.write_text('scenario = "base.toml"\nplant = "dynamic"\nruns = 1\nseed = 3\n'
+                    '[payload]\nmass = { uniform = [3.0, 3.5] }\n')
+    seed = run_seed(3, 0)
+    out = tmp_path / "replay"
+    assert main(["sweep", str(path), "--out", str(out), "--replay", str(seed),
+                 "--no-plots", "--quiet"]) == 0
+    notes = json.loads((out / "results.json").read_text())["warnings"]
+    assert notes and "exceeds the arm's rated payload of 2 kg" in notes[0]
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"warning: {note}" for note in notes]
