@@ -108,6 +108,8 @@ def _percent(value: float | None) -> str:
 
 def summary_lines(summary: dict[str, Any]) -> list[str]:
     """The terminal summary of a sweep's report."""
+    from ..sweep.report import all_bins, bin_label
+
     low_high = summary["success_interval"] or [None, None]
     lines = [f"success: {summary['successes']}/{summary['recorded']} = "
              f"{_percent(summary['success_rate'])} ({int(summary['confidence'] * 100)} % Wilson "
@@ -123,10 +125,21 @@ def summary_lines(summary: dict[str, Any]) -> list[str]:
             row = summary["metrics"][name]
             lines.append(f"  {name:<32} " + " ".join(
                 f"{row[k]:>10.4g}" for k in ("p5", "p50", "p95", "max")))
+    if summary["parameters"]:
+        lines.append("  success by parameter, per value or bin of the values drawn: "
+                     "rate (runs); -: no run")
     for name, entry in summary["parameters"].items():
-        rates = " ".join(_percent(b["rate"]).replace(" ", "") for b in entry["bins"])
-        lines.append(f"  success by {name} ({entry['law']}, low to high): {rates}")
+        bins = all_bins(entry)
+        rates = ", ".join(f"{bin_label(b, i, len(bins))}: {_rate(b['rate'])} ({b['runs']})"
+                          for i, b in enumerate(bins))
+        unit = f" [{entry['unit']}]" if entry.get("unit") else ""
+        norm = " (norm)" if entry.get("binned_by") == "norm" else ""
+        lines.append(f"  {name}{norm}{unit} ({entry['law']}): {rates}")
     return lines
+
+
+def _rate(value: float | None) -> str:
+    return "-" if value is None else f"{100.0 * value:.0f} %"
 
 
 def _replay(args: argparse.Namespace, spec: Any) -> int:

@@ -8,7 +8,10 @@ Written into the sweep's output folder next to ``runs.jsonl``:
   ``pandas.read_csv`` as it is;
 - ``summary.json``: the success rate with its 95 % Wilson score interval, the runs per status,
   each criterion with the number of runs that missed it, the percentiles of every numeric
-  metric and, per varied parameter, the success rate in each of its bins;
+  metric and, per varied parameter, its law, its unit, the success rate in each of its
+  non-empty bins (``bins``; ``binned_by``: ``norm`` for a vector perturbation) and what
+  defines every bin, empty ones too (``options``: a choice's values; ``edges``: the bin edges
+  of numbers; :func:`all_bins` puts the two together);
 - ``metrics.png``: histograms of the criteria's metrics (and a few headline ones), successes and
   failures stacked, each criterion's bound drawn;
 - ``success_by_parameter.png``: per varied parameter, the success rate (with its Wilson
@@ -19,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import json
 import math
 from collections.abc import Sequence
@@ -91,41 +95,97 @@ def metric_summary(records: Sequence[dict[str, Any]]) -> dict[str, dict[str, flo
     return out
 
 
-def parameter_bins(variable: Variable, records: Sequence[dict[str, Any]]
-                   ) -> list[dict[str, Any]]:
-    """Success rate of the runs in each bin of one varied parameter's values.
+def _choice_options(variable: Variable) -> list[Any] | None:
+    """The options of a one-value choice law, in the file's order (None for other laws)."""
+    if variable.dist.kind != "choice" or variable.count != 1:
+        return None
+    return list(dict.fromkeys(getattr(variable.dist, "options", ())))
 
-    Numbers fall into :data:`PARAMETER_BINS` equal-width bins over the values drawn (a vector
-    perturbation by its norm); a choice (of names or numbers) gets one bin per option.
 
-    Returns:
-        One entry per non-empty bin: ``low``, ``high`` (numbers) or ``value``, ``runs``,
-        ``successes``, ``rate``, ``ci`` (Wilson, :data:`CONFIDENCE`).
-    """
+def _bin_table(variable: Variable, records: Sequence[dict[str, Any]]
+               ) -> tuple[list[dict[str, Any]], dict[str, list[Any]]]:
+    """Every bin of one varied parameter, empty ones included, and what defines the bins."""
     pairs = [(parameter_value(variable, r["parameters"].get(variable.name)), bool(r["success"]))
              for r in records if variable.name in r["parameters"]]
     if not pairs:
-        return []
+        return [], {}
     bins: list[dict[str, Any]] = []
-    distinct = sorted({v for v, _ in pairs}, key=str)
-    if variable.dist.kind == "choice" or isinstance(pairs[0][0], str):
-        for value in distinct:
+    options = _choice_options(variable)
+    if options is not None or isinstance(pairs[0][0], str) or variable.dist.kind == "choice":
+        drawn = sorted({v for v, _ in pairs}, key=str)
+        values = (options or []) + [v for v in drawn if v not in (options or [])]
+        for value in values:
             hits = [ok for v, ok in pairs if v == value]
             bins.append({"value": value, "runs": len(hits), "successes": sum(hits)})
+        defined: dict[str, list[Any]] = {"options": values}
     else:
-        values = np.array([v for v, _ in pairs], dtype=float)
+        numbers = np.array([v for v, _ in pairs], dtype=float)
         ok = np.array([s for _, s in pairs], dtype=bool)
-        edges = np.linspace(values.min(), values.max(), PARAMETER_BINS + 1)
-        which = np.clip(np.searchsorted(edges, values, side="right") - 1, 0, PARAMETER_BINS - 1)
-        for b in range(PARAMETER_BINS):
+        count = PARAMETER_BINS if numbers.max() > numbers.min() else 1
+        edges = np.linspace(numbers.min(), numbers.max(), count + 1)
+        which = np.clip(np.searchsorted(edges, numbers, side="right") - 1, 0, count - 1)
+        for b in range(count):
             mask = which == b
-            if mask.any():
-                bins.append({"low": float(edges[b]), "high": float(edges[b + 1]),
-                             "runs": int(mask.sum()), "successes": int(ok[mask].sum())})
+            bins.append({"low": float(edges[b]), "high": float(edges[b + 1]),
+                         "runs": int(mask.sum()), "successes": int(ok[mask].sum())})
+        defined = {"edges": edges.tolist()}
     for entry in bins:
-        entry["rate"] = entry["successes"] / entry["runs"]
-        entry["ci"] = list(wilson_interval(entry["successes"], entry["runs"]))
-    return bins
+        runs = entry["runs"]
+        entry["rate"] = entry["successes"] / runs if runs else None
+        entry["ci"] = list(wilson_interval(entry["successes"], runs)) if runs else None
+    return bins, defined
+
+
+def parameter_bins(variable: Variable, records: Sequence[dict[str, Any]]
+                   ) -> list[dict[str, Any]]:
+    """Success rate of the runs in each non-empty bin of one varied parameter's values.
+
+    Numbers fall into :data:`PARAMETER_BINS` equal-width bins over the values drawn (a vector
+    perturbation by its norm; one bin when every run drew the same value); a choice (of names
+    or numbers) gets one bin per option, in the file's order.
+
+    Returns:
+        One entry per non-empty bin: ``low``, ``high`` (numbers) or ``value``, ``runs``,
+        ``successes``, ``rate``, ``ci`` (Wilson, :data:`CONFIDENCE`). :func:`all_bins` adds
+        the empty ones back.
+    """
+    return [b for b in _bin_table(variable, records)[0] if b["runs"]]
+
+
+def all_bins(entry: dict[str, Any]) -> list[dict[str, Any]]:
+    """Every bin of a parameter's entry in ``summary.json``, the empty ones too.
+
+    The empty bins (no run drew a value in them: an option never drawn, a range between the
+    values drawn) have ``runs`` 0 and ``rate`` and ``ci`` None. An entry without ``options`` or
+    ``edges`` (a summary written before they were recorded) gives its non-empty bins.
+    """
+    bins = entry["bins"]
+    if "options" in entry:
+        return [next((b for b in bins if b["value"] == v),
+                     {"value": v, "runs": 0, "successes": 0, "rate": None, "ci": None})
+                for v in entry["options"]]
+    if "edges" in entry:
+        edges = entry["edges"]
+        by_low = {(b["low"], b["high"]): b for b in bins}
+        return [by_low.get((low, high), {"low": low, "high": high, "runs": 0, "successes": 0,
+                                         "rate": None, "ci": None})
+                for low, high in itertools.pairwise(edges)]
+    return list(bins)
+
+
+def bin_label(entry: dict[str, Any], index: int, count: int) -> str:
+    """A bin's value (a choice) or range (numbers: ``[low, high)``, the last one closed)."""
+    if "value" in entry:
+        return str(entry["value"])
+    close = "]" if index == count - 1 else ")"
+    return f"[{entry['low']:.3g}, {entry['high']:.3g}{close}"
+
+
+def _parameter_entry(variable: Variable, records: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    bins, defined = _bin_table(variable, records)
+    return {"law": variable.dist.describe(), "unit": variable.unit,
+            "bins": [b for b in bins if b["runs"]], **defined,
+            **({"binned_by": "norm"} if variable.count > 1 else {})}
 
 
 def summarise(spec: SweepSpec, records: Sequence[dict[str, Any]]) -> dict[str, Any]:
@@ -146,8 +206,7 @@ def summarise(spec: SweepSpec, records: Sequence[dict[str, Any]]) -> dict[str, A
         "confidence": CONFIDENCE,
         "statuses": statuses, "criteria": criteria,
         "metrics": metric_summary(records),
-        "parameters": {v.name: {"law": v.dist.describe(), "unit": v.unit,
-                                "bins": parameter_bins(v, records)} for v in spec.varied},
+        "parameters": {v.name: _parameter_entry(v, records) for v in spec.varied},
     }
 
 
@@ -240,20 +299,18 @@ def _parameter_panels(spec: SweepSpec, records: Sequence[dict[str, Any]],
             ax.text(0.5, 0.5, "no parameter varies", ha="center", va="center")
             ax.set_axis_off()
             continue
-        bins = summary["parameters"][variable.name]["bins"]
-        if bins and "value" in bins[0]:
-            x = np.arange(len(bins))
-            ax.set_xticks(x, [str(b["value"]) for b in bins], fontsize=8)
-            width = 0.8
-        else:
-            x = np.array([(b["low"] + b["high"]) / 2 for b in bins])
-            width = 0.9 * (bins[0]["high"] - bins[0]["low"]) if bins else 1.0
-        rate = np.array([b["rate"] for b in bins])
-        low = rate - np.array([b["ci"][0] for b in bins])
-        high = np.array([b["ci"][1] for b in bins]) - rate
-        ax.bar(x, rate, width=width if width > 0 else 0.8, color="tab:blue", alpha=0.6)
-        ax.errorbar(x, rate, yerr=[low, high], fmt="none", ecolor="black", capsize=3)
-        for xi, b in zip(x, bins, strict=True):
+        every = all_bins(summary["parameters"][variable.name])
+        x = np.arange(len(every))
+        ranges = bool(every) and "low" in every[0]  # bins of numbers: their ranges, slanted
+        ax.set_xticks(x, [bin_label(b, i, len(every)) for i, b in enumerate(every)],
+                      fontsize=7, rotation=30 if ranges else 0, ha="right" if ranges else "center")
+        full = [i for i, b in enumerate(every) if b["runs"]]
+        rate = np.array([every[i]["rate"] for i in full], dtype=float)
+        low = rate - np.array([every[i]["ci"][0] for i in full], dtype=float)
+        high = np.array([every[i]["ci"][1] for i in full], dtype=float) - rate
+        ax.bar(x[full], rate, width=0.8, color="tab:blue", alpha=0.6)
+        ax.errorbar(x[full], rate, yerr=[low, high], fmt="none", ecolor="black", capsize=3)
+        for xi, b in zip(x, every, strict=True):
             ax.text(xi, 1.02, str(b["runs"]), ha="center", fontsize=7)
         if overall is not None:
             ax.axhline(overall, color="tab:gray", linestyle="--", linewidth=1)

@@ -12,6 +12,10 @@ import pytest
 from tests.support.scenario_text import bluerov_scenario
 from tests.support.sweeps import TINY, write_sweep
 from uvms_qp.cli import main
+from uvms_qp.cli.sweep import summary_lines
+from uvms_qp.sweep import load_sweep
+from uvms_qp.sweep.records import RunTask, blank_record, judge
+from uvms_qp.sweep.report import summarise
 from uvms_qp.sweep.sampling import run_seed
 
 
@@ -128,3 +132,19 @@ def test_replay_prints_the_run_s_warnings_as_run_does(tmp_path, capsys):
     assert notes and "exceeds the arm's rated payload of 2 kg" in notes[0]
     err = capsys.readouterr().err
     assert err.splitlines() == [f"warning: {note}" for note in notes]
+
+
+def test_the_summary_labels_each_rate_with_its_value_or_range_and_runs(tmp_path):
+    spec = load_sweep(write_sweep(tmp_path))
+    records = []
+    for i in range(6):
+        record = blank_record(RunTask.of(spec, i))
+        record["status"] = "ok"
+        record["parameters"] = {"sensors.delay": 0.05, "current.direction": -0.5 + 0.2 * i}
+        record["metrics"] = {"ee_error_max": 0.001 if i < 4 else 0.1, "level_met_share.0": 1.0}
+        judge(spec, record)
+        records.append(record)
+    lines = summary_lines(summarise(spec, records))
+    assert "  sensors.delay [s] (one of 0.0, 0.05): 0.0: - (0), 0.05: 67 % (6)" in lines
+    direction = next(line for line in lines if line.startswith("  current.direction"))
+    assert "[-0.5, -0.333): 100 % (1)" in direction and "[0.333, 0.5]: 0 % (1)" in direction

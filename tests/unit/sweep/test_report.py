@@ -8,7 +8,14 @@ import math
 import pytest
 
 from uvms_qp.sweep.records import RunTask, blank_record, judge
-from uvms_qp.sweep.report import parameter_bins, summarise, wilson_interval, write_report
+from uvms_qp.sweep.report import (
+    all_bins,
+    bin_label,
+    parameter_bins,
+    summarise,
+    wilson_interval,
+    write_report,
+)
 
 
 def _wilson(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
@@ -65,3 +72,25 @@ def test_success_by_parameter_counts_every_run_once(tiny):
             assert b["ci"][0] <= b["rate"] <= b["ci"][1]
     metric = summary["metrics"]["ee_error_max"]
     assert metric["min"] <= metric["p5"] <= metric["p50"] <= metric["p95"] <= metric["max"]
+
+
+def test_every_bin_is_kept_the_empty_ones_too(tiny):
+    # sensors.delay is one of 0.0, 0.05: only 0.05 drawn; the directions leave bins empty
+    records = _records(tiny, [(0.0, 0.001 if i < 4 else 0.1) for i in range(6)])
+    for i, record in enumerate(records):
+        record["parameters"]["sensors.delay"] = 0.05
+        record["parameters"]["current.direction"] = 0.5 if i == 5 else -0.5 + 0.01 * i
+    entries = summarise(tiny, records)["parameters"]
+    delay = entries["sensors.delay"]
+    assert delay["options"] == [0.0, 0.05]
+    assert [(b["value"], b["runs"]) for b in delay["bins"]] == [(0.05, 6)]  # as before
+    assert [(b["value"], b["runs"], b["rate"]) for b in all_bins(delay)] == [
+        (0.0, 0, None), (0.05, 6, pytest.approx(4 / 6))]
+    direction = entries["current.direction"]
+    assert direction["edges"][0] == -0.5 and direction["edges"][-1] == 0.5
+    every = all_bins(direction)
+    assert len(every) == 6 and [b["runs"] for b in every] == [5, 0, 0, 0, 0, 1]
+    assert [bin_label(b, i, 6) for i, b in enumerate(every)][::5] == ["[-0.5, -0.333)",
+                                                                     "[0.333, 0.5]"]
+    assert entries["initial.joints"]["binned_by"] == "norm"
+    assert len(all_bins(entries["initial.joints"])) == 1  # every run drew the same norm
