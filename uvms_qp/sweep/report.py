@@ -121,7 +121,7 @@ def _bin_table(variable: Variable, records: Sequence[dict[str, Any]]
     else:
         numbers = np.array([v for v, _ in pairs], dtype=float)
         ok = np.array([s for _, s in pairs], dtype=bool)
-        count = PARAMETER_BINS if numbers.max() > numbers.min() else 1
+        count = min(PARAMETER_BINS, len(set(numbers.tolist())))  # no more bins than values
         edges = np.linspace(numbers.min(), numbers.max(), count + 1)
         which = np.clip(np.searchsorted(edges, numbers, side="right") - 1, 0, count - 1)
         for b in range(count):
@@ -141,7 +141,7 @@ def parameter_bins(variable: Variable, records: Sequence[dict[str, Any]]
     """Success rate of the runs in each non-empty bin of one varied parameter's values.
 
     Numbers fall into :data:`PARAMETER_BINS` equal-width bins over the values drawn (a vector
-    perturbation by its norm; one bin when every run drew the same value); a choice (of names
+    perturbation by its norm; no more bins than distinct values drawn); a choice (of names
     or numbers) gets one bin per option, in the file's order.
 
     Returns:

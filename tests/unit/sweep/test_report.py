@@ -94,3 +94,12 @@ def test_every_bin_is_kept_the_empty_ones_too(tiny):
                                                                      "[0.333, 0.5]"]
     assert entries["initial.joints"]["binned_by"] == "norm"
     assert len(all_bins(entries["initial.joints"])) == 1  # every run drew the same norm
+
+
+def test_there_are_no_more_bins_than_values_drawn(tiny):
+    records = _records(tiny, [(0.0, 0.001), (0.0, 0.1), (0.0, 0.001)])
+    for record, direction in zip(records, (-0.4, 0.4, 0.4), strict=True):
+        record["parameters"]["current.direction"] = direction
+    entry = summarise(tiny, records)["parameters"]["current.direction"]
+    assert entry["edges"] == [-0.4, 0.0, 0.4]
+    assert [(b["runs"], b["successes"]) for b in all_bins(entry)] == [(1, 1), (2, 1)]
