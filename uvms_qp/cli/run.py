@@ -98,6 +98,17 @@ DYNAMIC_KEYS = (
 )
 
 
+def plant_line(settings: dict[str, Any]) -> str:
+    """One line naming what a dynamic run drove: parameter set, feed-forward, coordination."""
+    voltage = settings.get("supply_voltage")
+    rates = [f"physics {settings['physics_step']:g} s", f"servos {settings['servo_rate']:g} Hz"]
+    if voltage is not None:
+        rates.append(f"thrusters at {voltage:g} V")
+    return (f"plant: dynamic, parameter set {settings['parameters']}, feed-forward "
+            f"{settings['feedforward']}, coordination "
+            f"{'on' if settings['coordination'] else 'off'} ({', '.join(rates)})")
+
+
 def dynamic_summary(dynamic: dict[str, Any], kinematic: dict[str, Any]) -> str:
     """The dynamic run's metrics beside the kinematic run's, then the per-axis and per-part ones."""
     lines = [f"  {'on the floating vehicle':<28} {'dynamic':>12} {'kinematic':>12}"]
@@ -175,6 +186,7 @@ def run(args: argparse.Namespace) -> int:
                   f"ran the nearest, {simulated:g} s")
         print(_summary(result.metrics()))
         if reference is not None:
+            print(plant_line(result.plant_settings))
             print(dynamic_summary(result.metrics(), reference.metrics()))
     if result.nan_steps:
         print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)

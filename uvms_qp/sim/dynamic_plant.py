@@ -24,6 +24,7 @@ time. :class:`DynamicSeries` keeps what happened at every servo tick.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -75,6 +76,18 @@ def thruster_layout(parameters: Any, voltage: float | None) -> ThrusterLayout:
         raise InputError(f"supply_voltage: applies to the bundled T200 layout; layout "
                          f"{layout.name!r} sets its own force limits")
     return ThrusterLayout.bluerov2_heavy(voltage)
+
+
+def layout_voltage(layout: ThrusterLayout, voltage: float | None) -> float | None:
+    """The supply [V] a layout's thrust limits are for.
+
+    ``voltage`` if given, else the bundled T200 layout's own (its name says it), else None (a
+    layout of one's own sets its own limits).
+    """
+    if voltage is not None:
+        return float(voltage)
+    match = re.fullmatch(r"bluerov2_heavy_(\d+(?:\.\d+)?)V", layout.name or "")
+    return None if match is None else float(match.group(1))
 
 
 def water(current: Any) -> Any:
@@ -302,6 +315,23 @@ class DynamicPlant(RunState):
             records["joint_reference"].append(joint_ref)
         self._q, self._v = q, v
         return q
+
+    def settings(self, spec: PlantSpec) -> dict[str, Any]:
+        """The record's ``plant_settings``: the values this plant runs with, given or default.
+
+        ``physics_step`` [s], ``supply_voltage`` [V] (None for a layout that sets its own
+        limits) and the velocity loop's ``gains`` (6 each, ``nu`` order) are those used;
+        ``defaults`` names the ones the scenario did not give.
+        """
+        record = dict(spec.settings())
+        record["physics_step"] = self.physics_step
+        record["supply_voltage"] = layout_voltage(self.layout, spec.supply_voltage)
+        record["gains"] = {"proportional": [float(g) for g in self.loop.kp],
+                           "integral": [float(g) for g in self.loop.ki]}
+        given = {"physics_step": spec.physics_step, "supply_voltage": spec.supply_voltage,
+                 "gains.proportional": spec.proportional, "gains.integral": spec.integral}
+        record["defaults"] = [key for key, value in given.items() if value is None]
+        return record
 
     def series(self, steps: int) -> DynamicSeries:
         """What the first ``steps`` control periods of the run recorded (servo ticks)."""
