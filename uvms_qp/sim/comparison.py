@@ -366,10 +366,10 @@ def compare(
                 )
         names = [n for n in names if n in schemes]
     runs = []
-    for index, name in enumerate(names):
+    for name in names:
         stack = base.build_stack()  # each run starts from fresh tasks, no event applied
         scheme = (base.make_controller(stack=stack) if name == "hqp"
-                  else build_scheme(name, base, f"schemes[{index}]", stack=stack))
+                  else build_scheme(name, base, base.scheme_path(name), stack=stack))
         recorder = _Recorder(scheme)
         result = simulate(base, recorder, stack=stack, scheme_name=name, progress=progress)
         if name != "hqp":
