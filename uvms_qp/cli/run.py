@@ -17,7 +17,13 @@ import sys
 from typing import Any
 
 from ..errors import ConfigError, UnknownSolverError
-from ._common import output_directory, register_model_paths, scenario_command, writing_output
+from ._common import (
+    output_directory,
+    print_warnings,
+    register_model_paths,
+    scenario_command,
+    writing_output,
+)
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
@@ -188,8 +194,6 @@ def run(args: argparse.Namespace) -> int:
         if reference is not None:
             print(plant_line(result.plant_settings))
             print(dynamic_summary(result.metrics(), reference.metrics()))
-    if result.nan_steps:
-        print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
-    for note in rating_notes(result.metrics(), result.plant_settings):
-        print(f"warning: {note}", file=sys.stderr)
+    nan = [f"{result.nan_steps} steps produced a non-finite command"] if result.nan_steps else []
+    print_warnings(nan + rating_notes(result.metrics(), result.plant_settings))
     return 0
