@@ -26,6 +26,12 @@ def plain(doc: str | None) -> str:
     return re.sub(r"::$", ":", text, flags=re.MULTILINE)
 
 
+def print_warnings(lines: Sequence[str]) -> None:
+    """Print each line as a ``warning:`` line on stderr (what a run reports but does not refuse)."""
+    for line in lines:
+        print(f"warning: {line}", file=sys.stderr)
+
+
 def print_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
     """Print left-aligned columns, one row per line.
 

@@ -7,20 +7,27 @@ first row the plant each run drove) and PNG figures with the schemes overlaid, a
 within the terminal's width (``COLUMNS`` when set, 80 characters in a pipe): the schemes that do
 not fit follow in a second table. A run that breaks the scenario's hard bounds is marked
 ``(exceeded)`` in the table and named in a warning: the closed-form schemes ignore the bounds,
-although each of their steps reports status ``optimal``. An invalid scenario, an unknown scheme, a
-``--duration`` out of the scenario's limits or an unusable ``--out`` (checked before anything runs)
-exits with status 2 and a one-line message. ``--plant dynamic`` runs every scheme on the floating
-vehicle (``docs/dynamics.md``), ``--plant kinematic`` on the exact plant, whatever the scenario's
-``[plant]`` says.
+although each of their steps reports status ``optimal``. The runs' own warnings (a payload beyond
+the arm's rated payload) are printed once each, naming the runs that gave them, and kept under
+``warnings`` in ``comparison.json``. An invalid scenario, an unknown scheme, a ``--duration`` out
+of the scenario's limits or an unusable ``--out`` (checked before anything runs) exits with
+status 2 and a one-line message. ``--plant dynamic`` runs every scheme on the floating vehicle
+(``docs/dynamics.md``; the table then adds its roll, pitch and thrust energy), ``--plant
+kinematic`` on the exact plant, whatever the scenario's ``[plant]`` says.
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
-from ._common import output_directory, register_model_paths, scenario_command, writing_output
+from ._common import (
+    output_directory,
+    print_warnings,
+    register_model_paths,
+    scenario_command,
+    writing_output,
+)
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
@@ -109,6 +116,5 @@ def run(args: argparse.Namespace) -> int:
         print_table(comparison, Console())
         figures = "" if args.no_plots else " and figures"
         print(f"results, comparison.md{figures} in {args.out}")
-    for note in comparison.notes():
-        print(f"warning: {note}", file=sys.stderr)
+    print_warnings(comparison.notes() + comparison.warning_lines())
     return 0

@@ -17,7 +17,13 @@ import sys
 from typing import Any
 
 from ..errors import ConfigError, UnknownSolverError
-from ._common import output_directory, register_model_paths, scenario_command, writing_output
+from ._common import (
+    output_directory,
+    print_warnings,
+    register_model_paths,
+    scenario_command,
+    writing_output,
+)
 
 
 def _options(parser: argparse.ArgumentParser) -> None:
@@ -98,6 +104,17 @@ DYNAMIC_KEYS = (
 )
 
 
+def plant_line(settings: dict[str, Any]) -> str:
+    """One line naming what a dynamic run drove: parameter set, feed-forward, coordination."""
+    voltage = settings.get("supply_voltage")
+    rates = [f"physics {settings['physics_step']:g} s", f"servos {settings['servo_rate']:g} Hz"]
+    if voltage is not None:
+        rates.append(f"thrusters at {voltage:g} V")
+    return (f"plant: dynamic, parameter set {settings['parameters']}, feed-forward "
+            f"{settings['feedforward']}, coordination "
+            f"{'on' if settings['coordination'] else 'off'} ({', '.join(rates)})")
+
+
 def dynamic_summary(dynamic: dict[str, Any], kinematic: dict[str, Any]) -> str:
     """The dynamic run's metrics beside the kinematic run's, then the per-axis and per-part ones."""
     lines = [f"  {'on the floating vehicle':<28} {'dynamic':>12} {'kinematic':>12}"]
@@ -174,16 +191,15 @@ def run(args: argparse.Namespace) -> int:
                   f"ran the nearest, {simulated:g} s")
         print(_summary(result.metrics()))
         if reference is not None:
+            print(plant_line(result.plant_settings))
             print(dynamic_summary(result.metrics(), reference.metrics()))
-    print_warnings(result)
+    print_warnings(run_warnings(result))
     return 0
 
 
-def print_warnings(result: Any) -> None:
-    """Print a run's warnings on stderr (non-finite commands; the ``warnings`` of its results)."""
+def run_warnings(result: Any) -> list[str]:
+    """What a run reports but does not refuse: non-finite commands, a payload beyond the rating."""
     from ..sim.dynamic_metrics import rating_notes
 
-    if result.nan_steps:
-        print(f"warning: {result.nan_steps} steps produced a non-finite command", file=sys.stderr)
-    for note in rating_notes(result.metrics(), result.plant_settings):
-        print(f"warning: {note}", file=sys.stderr)
+    nan = [f"{result.nan_steps} steps produced a non-finite command"] if result.nan_steps else []
+    return nan + rating_notes(result.metrics(), result.plant_settings)

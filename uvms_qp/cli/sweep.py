@@ -147,7 +147,8 @@ def _replay(args: argparse.Namespace, spec: Any) -> int:
     from ..sim.results import write_results
     from ..sweep.outcome import run_outcome
     from ..sweep.records import simulate_run
-    from .run import print_warnings
+    from ._common import print_warnings
+    from .run import run_warnings
 
     seed = args.replay
     if seed < 0 or seed >= 2**63:
@@ -172,7 +173,7 @@ def _replay(args: argparse.Namespace, spec: Any) -> int:
             print(f"  {criterion.describe():<40} {value} {verdict}")
         if getattr(result, "stopped", None):
             print(f"  stopped early: {result.stopped}")
-    print_warnings(result)
+    print_warnings(run_warnings(result))
     return 0
 
 

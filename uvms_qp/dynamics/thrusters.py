@@ -270,6 +270,8 @@ class ThrusterLayout:
             DOFs must have full rank.
         name: Name of the layout (reports).
         source: Where the numbers come from (reports).
+        supply_voltage: The supply voltage [V] the thrusters' limits are for, when they come
+            from a rating at one voltage (reports); None: limits of one's own.
 
     Attributes:
         thrusters: The thrusters, in column order; ``names`` their names.
@@ -286,7 +288,8 @@ class ThrusterLayout:
     """
 
     def __init__(self, thrusters: Sequence[Thruster], *, actuated: Sequence[str] | None = None,
-                 name: str = "", source: str = "") -> None:
+                 name: str = "", source: str = "",
+                 supply_voltage: float | None = None) -> None:
         thrusters = tuple(thrusters)
         if not thrusters:
             raise InputError("thrusters: expected at least one thruster")
@@ -309,6 +312,8 @@ class ThrusterLayout:
         self.actuated: tuple[str, ...] = tuple(d for d in NU_NAMES if d in dofs)
         self.name = name
         self.source = source
+        self.supply_voltage = (None if supply_voltage is None
+                               else as_scalar(supply_voltage, "supply_voltage", positive=True))
         axes = np.array([t.axis for t in thrusters]).T  # (3, n)
         positions = np.array([t.position for t in thrusters]).T
         matrix = np.vstack([axes, np.cross(positions, axes, axis=0)])
@@ -386,6 +391,7 @@ class ThrusterLayout:
                                    rating.voltage, time_constant)
                      for name, r, a in _BLUEROV2_HEAVY_FLU]
         return cls(thrusters, name=f"bluerov2_heavy_{rating.voltage:g}V",
+                   supply_voltage=rating.voltage,
                    source=("BlueROV2 Heavy public description (ArduSub Gazebo model); Blue "
                            f"Robotics T200 public performance data (2019) at {rating.voltage:g} V"))
 

@@ -36,6 +36,7 @@ from .._validation import FloatArray
 from ..errors import ConfigError
 from ..schemes import build_scheme
 from ._files import write_atomic
+from .dynamic_metrics import rating_notes
 from .results import write_results
 from .runner import SimulationResult, simulate
 from .scenario import Scenario, load_scenario
@@ -72,6 +73,13 @@ TABLE_METRICS: tuple[tuple[str, str], ...] = (
     ("status_counts", "steps"),
 )
 
+#: Rows added when a run drove the dynamic plant: the floating vehicle's attitude and the
+#: thrusters' energy (``docs/dynamics.md``).
+DYNAMIC_TABLE_METRICS: tuple[tuple[str, str], ...] = (
+    ("roll_max", "rad"),
+    ("pitch_max", "rad"),
+    ("energy", "J"),
+)
 #: Dict-valued table metrics with one row per key (by unit, by task).
 PER_KEY = ("command_change_max", "settling_time")
 
@@ -169,10 +177,12 @@ class Comparison:
         """Rows ``(metric, unit, values per run)`` for metrics present in at least one run.
 
         A metric of :data:`PER_KEY` (settling time by task, command change by unit) gives one
-        row per key, in the order the runs name them.
+        row per key, in the order the runs name them. When a run drove the dynamic plant, the
+        rows of :data:`DYNAMIC_TABLE_METRICS` follow.
         """
         rows: list[tuple[str, str, list[Any]]] = []
-        for key, unit in TABLE_METRICS:
+        dynamic = any(run.plant == "dynamic" for run in self.runs)
+        for key, unit in TABLE_METRICS + (DYNAMIC_TABLE_METRICS if dynamic else ()):
             values = [run.metrics.get(key) for run in self.runs]
             if key in PER_KEY and any(isinstance(v, dict) for v in values):
                 subs = list(dict.fromkeys(k for v in values if isinstance(v, dict) for k in v))
@@ -206,6 +216,22 @@ class Comparison:
                              "its steps' status does not show it")
         return lines
 
+    def warnings(self) -> list[dict[str, Any]]:
+        """The runs' warnings (a payload beyond the arm's rating...), each distinct one once.
+
+        Each is ``{"warning": text, "runs": [scheme names]}``, in the order the runs give them.
+        """
+        found: dict[str, list[str]] = {}
+        for run in self.runs:
+            settings = getattr(run.result, "plant_settings", None) or {}
+            for note in rating_notes(run.metrics, settings):
+                found.setdefault(note, []).append(run.name)
+        return [{"warning": note, "runs": names} for note, names in found.items()]
+
+    def warning_lines(self) -> list[str]:
+        """:meth:`warnings` as text, each naming the runs that gave it."""
+        return [f"{w['warning']} (runs: {', '.join(w['runs'])})" for w in self.warnings()]
+
     def cells(self) -> list[tuple[str, str, list[str]]]:
         """:meth:`table` as text, with the bound violations that exceed the tolerance marked.
 
@@ -232,7 +258,7 @@ class Comparison:
         ]
         for key, unit, texts in self.cells():
             lines.append(f"| {key} | {unit} | {' | '.join(texts)} |")
-        notes = self.notes()
+        notes = self.notes() + self.warning_lines()
         if notes:
             lines.append("")
             lines.extend(f"- {note}" for note in notes)
@@ -270,6 +296,7 @@ class Comparison:
                         for key, unit, values in self.table()},
             "exceeds_hard_bounds": [self.exceeds_bounds(run) for run in self.runs],
             "notes": self.notes(),
+            "warnings": self.warnings(),
         }
         js = directory / "comparison.json"
         write_atomic(js, json.dumps(table, allow_nan=False, indent=1))
@@ -366,10 +393,10 @@ def compare(
                 )
         names = [n for n in names if n in schemes]
     runs = []
-    for index, name in enumerate(names):
+    for name in names:
         stack = base.build_stack()  # each run starts from fresh tasks, no event applied
         scheme = (base.make_controller(stack=stack) if name == "hqp"
-                  else build_scheme(name, base, f"schemes[{index}]", stack=stack))
+                  else build_scheme(name, base, base.scheme_path(name), stack=stack))
         recorder = _Recorder(scheme)
         result = simulate(base, recorder, stack=stack, scheme_name=name, progress=progress)
         if name != "hqp":

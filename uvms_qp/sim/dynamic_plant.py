@@ -77,6 +77,15 @@ def thruster_layout(parameters: Any, voltage: float | None) -> ThrusterLayout:
     return ThrusterLayout.bluerov2_heavy(voltage)
 
 
+def layout_voltage(layout: ThrusterLayout, voltage: float | None) -> float | None:
+    """The supply [V] a layout's thrust limits are for.
+
+    ``voltage`` if given, else the layout's own (:attr:`ThrusterLayout.supply_voltage`: the
+    bundled T200 layout's), else None (a layout of one's own sets its own limits).
+    """
+    return float(voltage) if voltage is not None else layout.supply_voltage
+
+
 def water(current: Any) -> Any:
     """The water's world velocity for the plant: None, a constant vector or a slow oscillation.
 
@@ -302,6 +311,23 @@ class DynamicPlant(RunState):
             records["joint_reference"].append(joint_ref)
         self._q, self._v = q, v
         return q
+
+    def settings(self, spec: PlantSpec) -> dict[str, Any]:
+        """The record's ``plant_settings``: the values this plant runs with, given or default.
+
+        ``physics_step`` [s], ``supply_voltage`` [V] (None for a layout that sets its own
+        limits) and the velocity loop's ``gains`` (6 each, ``nu`` order) are those used;
+        ``defaults`` names the ones the scenario did not give.
+        """
+        record = dict(spec.settings())
+        record["physics_step"] = self.physics_step
+        record["supply_voltage"] = layout_voltage(self.layout, spec.supply_voltage)
+        record["gains"] = {"proportional": [float(g) for g in self.loop.kp],
+                           "integral": [float(g) for g in self.loop.ki]}
+        given = {"physics_step": spec.physics_step, "supply_voltage": spec.supply_voltage,
+                 "gains.proportional": spec.proportional, "gains.integral": spec.integral}
+        record["defaults"] = [key for key, value in given.items() if value is None]
+        return record
 
     def series(self, steps: int) -> DynamicSeries:
         """What the first ``steps`` control periods of the run recorded (servo ticks)."""

@@ -50,6 +50,8 @@ class Plant(Protocol):
     def series(self, steps: int) -> Any:
         """What the plant recorded over the first ``steps`` control periods (None: nothing)."""
 
+    # optional: ``settings(spec) -> dict``, what the run's record says of the plant
+    # (``results.json``: ``plant_settings``); without it, the specification's own settings
 
 class RunState:
     """The true configuration a plant keeps between ``start`` and the end of a run."""

@@ -156,7 +156,9 @@ class Scenario:
         deadline: Wall-time budget of one controller step [s], or None for none.
         damping: The controller's damping threshold of the levels that set none, or None for
             the library's (:data:`uvms_qp.hqp.damping.DEFAULT_THRESHOLD`).
-        schemes: Schemes to compare (``"hqp"`` always first).
+        schemes: Schemes to compare (``"hqp"`` first unless listed elsewhere).
+        listed_schemes: The schemes as the file (or the caller) listed them, ``"hqp"`` only if
+            listed: what a message's ``schemes[i]`` counts (:meth:`scheme_path`).
         scheme_options: Keyword arguments of each listed closed-form scheme, by scheme name.
         integrator: The configured :class:`~uvms_qp.sim.integrators.Integrator` (stateless).
         current: Optional constant current.
@@ -197,17 +199,25 @@ class Scenario:
     damping: float | None = None
     plant: PlantSpec = field(default_factory=PlantSpec)
     sensors: Sensors | None = None
+    listed_schemes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "q0", _read_only(self.q0))
         if self.metric is not None:
             object.__setattr__(self, "metric", _read_only(self.metric))
         object.__setattr__(self, "schemes", tuple(self.schemes))
+        object.__setattr__(self, "listed_schemes", tuple(self.listed_schemes))
         object.__setattr__(self, "scheme_options", MappingProxyType(
             {k: MappingProxyType(dict(v)) for k, v in self.scheme_options.items()}))
         object.__setattr__(self, "trajectories", MappingProxyType(dict(self.trajectories)))
         object.__setattr__(self, "events", tuple(sorted(self.events, key=lambda e: e.time)))
         object.__setattr__(self, "phases", tuple(self.phases))
+
+    def scheme_path(self, name: str) -> str:
+        """Where scheme ``name`` is listed, for messages: ``schemes[i]`` of the file's list."""
+        if name in self.listed_schemes:
+            return join("schemes", self.listed_schemes.index(name))
+        return "schemes"
 
     @property
     def steps(self) -> int:
@@ -402,6 +412,7 @@ class Scenario:
             deadline=None if deadline is None else as_scalar(deadline, "deadline", positive=True),
             damping=None if damping is None else as_scalar(damping, "damping", nonnegative=True),
             schemes=names,
+            listed_schemes=tuple(schemes),
             scheme_options=options,
             integrator=integrator or Integrator(model, current=current),
             current=current,
@@ -454,9 +465,9 @@ class Scenario:
         ``stack`` is the bound stack the scenario is checked on; the schemes read it before the
         events change it (the payload force of a paper scheme is the task's initial one).
         """
-        for i, name in enumerate(self.schemes):
+        for name in self.schemes:
             if name != "hqp":
-                build_scheme(name, self, join("schemes", i), stack=stack)
+                build_scheme(name, self, self.scheme_path(name), stack=stack)
         apply_events(self.events, stack, self.dt)
 
 
@@ -731,7 +742,8 @@ def scenario_from_dict(
         if np.any(metric <= 0.0):
             i = int(np.flatnonzero(metric <= 0.0)[0])
             raise ConfigError(f"expected a positive weight, got {metric[i]:g}", f"metric[{i}]")
-    schemes = _check_scheme_names(top.take_strs("schemes", ["hqp"]) or ["hqp"], top.at("schemes"))
+    listed = top.take_strs("schemes", ["hqp"]) or ["hqp"]
+    schemes = _check_scheme_names(listed, top.at("schemes"))
     scheme_options = _read_scheme_options(top, schemes)
     method = top.take_str("integrator", "euler", choices=("euler", "rk4"))
     q0 = _initial_configuration(top.take_table("initial"), model)
@@ -774,6 +786,7 @@ def scenario_from_dict(
         strict=strict,
         deadline=deadline,
         schemes=schemes,
+        listed_schemes=tuple(listed),
         scheme_options=scheme_options,
         integrator=integrator,
         current=current,

@@ -47,6 +47,32 @@ def test_compare_on_the_dynamic_plant_says_so_in_its_table(tmp_path, capsys):
                for line in capsys.readouterr().out.splitlines())
 
 
+def test_compare_prints_and_records_each_distinct_warning_of_its_runs_once(tmp_path, capsys):
+    # the demo's 2.5 kg payload, taken at once, is beyond the arm's 2 kg rating in both runs
+    demo = importlib.resources.files("uvms_qp.scenarios").joinpath("bluerov2_demo.toml")
+    text = demo.read_text().replace("time = 15.0", "time = 0.1")  # the pick-up and its event
+    text = text.replace("[initial]", 'schemes = ["hqp", "wang_pseudoinverse"]\n\n[initial]', 1)
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    out = tmp_path / "cmp"
+    assert main(["compare", str(path), "--plant", "dynamic", "--duration", "0.3",
+                 "--out", str(out), "--no-plots"]) == 0
+    printed = capsys.readouterr()
+    rated = "the payload of 2.5 kg exceeds the arm's rated payload of 2 kg"
+    for name in ("hqp", "wang_pseudoinverse"):
+        assert rated in json.loads((out / name / "results.json").read_text())["warnings"][0]
+    warnings = [line for line in printed.err.splitlines() if rated in line]
+    assert len(warnings) == 1 and warnings[0].startswith("warning: ")
+    assert warnings[0].endswith("(runs: hqp, wang_pseudoinverse)")
+    table = json.loads((out / "comparison.json").read_text())
+    assert [w["runs"] for w in table["warnings"]] == [["hqp", "wang_pseudoinverse"]]
+    assert table["warnings"][0]["warning"].startswith(rated)
+    # the floating vehicle's attitude and thrust energy are rows of the table
+    for key in ("roll_max", "pitch_max", "energy"):
+        assert len(table["metrics"][key]["values"]) == 2
+    assert "| energy | J |" in (out / "comparison.md").read_text()
+
+
 def test_compare_rejects_a_scheme_the_scenario_does_not_name(tmp_path, capsys):
     code = main(["compare", "paper001_circle", "--out", str(tmp_path), "--schemes", "nenchev_sc",
                  "--quiet"])

@@ -97,6 +97,7 @@ def test_heavy_limits_and_dead_band_follow_the_t200_data(voltage):
     # linear PWM map: 1500 us stop, 1900 us full forward, 1100 us full reverse
     assert t.forward_dead_band == pytest.approx((band_high - 1500) / 400 * forward)
     assert t.reverse_dead_band == pytest.approx((1500 - band_low) / 400 * reverse)
+    assert layout.supply_voltage == voltage  # what a run records as its supply
 
 
 def test_unknown_voltage_lists_the_published_ones():
@@ -176,6 +177,7 @@ def test_user_table_in_flu_reproduces_the_bundled_layout(heavy):
     np.testing.assert_allclose(layout.matrix, heavy.matrix, atol=1e-15)
     np.testing.assert_array_equal(layout.upper, heavy.upper)
     assert layout.names == heavy.names
+    assert layout.supply_voltage is None  # limits of its own, not a rating at one supply
 
 
 def test_user_table_from_toml_file(tmp_path, heavy):

@@ -174,6 +174,35 @@ def test_the_record_says_which_plant_and_sensors_ran(tmp_path):
     assert record["kinematic_reference"]["metrics"]["nan_steps"] == 0
 
 
+def test_the_record_gives_the_values_the_plant_ran_with_not_the_scenario_s_overrides(
+        tmp_path, capsys):
+    # no physics step, supply or gains in the scenario: the record has the plant's own
+    path = tmp_path / "s.toml"
+    path.write_text(bluerov_scenario("duration = 0.2", '\n[plant]\ntype = "dynamic"\n'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    settings = json.loads((tmp_path / "out" / "results.json").read_text())["plant_settings"]
+    assert settings["physics_step"] == 0.005 and settings["supply_voltage"] == 16.0
+    placed = settings["gains"]
+    assert len(placed["proportional"]) == 6 and len(placed["integral"]) == 6
+    assert min(placed["proportional"]) > 0.0 and min(placed["integral"]) > 0.0
+    assert settings["defaults"] == ["physics_step", "supply_voltage", "gains.proportional",
+                                    "gains.integral"]
+    assert ("plant: dynamic, parameter set bluerov2_heavy_von_benzon_2022, feed-forward model, "
+            "coordination off (physics 0.005 s, servos 100 Hz, thrusters at 16 V)") in printed
+    # given values are recorded as given, and no longer listed as defaults
+    path.write_text(bluerov_scenario("duration = 0.2", (
+        '\n[plant]\ntype = "dynamic"\nphysics_step = 0.002\nsupply_voltage = 12.0\n'
+        '[plant.gains]\nproportional = [145, 165, 224, 4, 2, 5]\n')))
+    run = simulate(load_scenario(path))
+    settings = run.plant_settings
+    assert settings["physics_step"] == pytest.approx(0.002)
+    assert settings["supply_voltage"] == 12.0
+    assert settings["gains"]["proportional"] == [145.0, 165.0, 224.0, 4.0, 2.0, 5.0]
+    assert len(settings["gains"]["integral"]) == 6
+    assert settings["defaults"] == ["gains.integral"]
+
+
 def test_the_payload_of_a_plant_table_is_attached_at_its_time():
     sc = scenario('\n[plant]\ntype = "dynamic"\nservo_rate = 50.0\n'
                   '[plant.payload]\ntime = 0.2\nmass = 1.0\nvolume = 0.0002\n')

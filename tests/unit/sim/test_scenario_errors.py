@@ -416,6 +416,23 @@ def test_scheme_for_the_wrong_model_kind_is_named_once():
     assert "'planar'" in message and "'spatial'" in message
 
 
+@pytest.mark.parametrize(("listed", "index"), [
+    (["soylu_sr_task_priority"], 0),
+    (["soylu_sr_task_priority", "hqp"], 0),
+    (["hqp", "soylu_sr_task_priority"], 1),
+])
+def test_a_scheme_s_error_names_its_place_in_the_file_s_list(tmp_path, listed, index):
+    # hqp, compared even when not listed, does not count toward the index
+    demo = Path(load_scenario("bluerov2_demo").source).read_text()
+    path = tmp_path / "s.toml"
+    path.write_text(demo.replace("[initial]", f"schemes = {listed!r}\n\n[initial]", 1)
+                    .replace("'", '"'))
+    with pytest.raises(ConfigError) as info:
+        load_scenario(path)
+    assert str(info.value).split(": ")[0] == f"schemes[{index}]", str(info.value)
+    assert "needs a model with vehicle kind 'planar'" in str(info.value)
+
+
 # ------------------------------------------ unknown before missing keys, helpful messages
 def replaced(old: str, new: str) -> str:
     assert old in BASE, old
