@@ -32,6 +32,14 @@ def print_warnings(lines: Sequence[str]) -> None:
         print(f"warning: {line}", file=sys.stderr)
 
 
+def run_warnings(result: Any) -> list[str]:
+    """What a run reports but does not refuse: non-finite commands, a payload beyond the rating."""
+    from ..sim.dynamic_metrics import rating_notes  # the plant's metrics load only when used
+
+    nan = [f"{result.nan_steps} steps produced a non-finite command"] if result.nan_steps else []
+    return nan + rating_notes(result.metrics(), result.plant_settings)
+
+
 def print_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
     """Print left-aligned columns, one row per line.
 

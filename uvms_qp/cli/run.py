@@ -21,6 +21,7 @@ from ._common import (
     output_directory,
     print_warnings,
     register_model_paths,
+    run_warnings,
     scenario_command,
     writing_output,
 )
@@ -195,11 +196,3 @@ def run(args: argparse.Namespace) -> int:
             print(dynamic_summary(result.metrics(), reference.metrics()))
     print_warnings(run_warnings(result))
     return 0
-
-
-def run_warnings(result: Any) -> list[str]:
-    """What a run reports but does not refuse: non-finite commands, a payload beyond the rating."""
-    from ..sim.dynamic_metrics import rating_notes
-
-    nan = [f"{result.nan_steps} steps produced a non-finite command"] if result.nan_steps else []
-    return nan + rating_notes(result.metrics(), result.plant_settings)

@@ -23,7 +23,15 @@ import time
 from typing import Any
 
 from ..errors import ConfigError
-from ._common import add_model_path, output_directory, plain, register_model_paths, writing_output
+from ._common import (
+    add_model_path,
+    output_directory,
+    plain,
+    print_warnings,
+    register_model_paths,
+    run_warnings,
+    writing_output,
+)
 
 #: Longest silence of the progress lines printed when standard error is not a terminal [s].
 PROGRESS_EVERY = 10.0
@@ -147,8 +155,6 @@ def _replay(args: argparse.Namespace, spec: Any) -> int:
     from ..sim.results import write_results
     from ..sweep.outcome import run_outcome
     from ..sweep.records import simulate_run
-    from ._common import print_warnings
-    from .run import run_warnings
 
     seed = args.replay
     if seed < 0 or seed >= 2**63:
