@@ -71,7 +71,7 @@ COUNT_TOLERANCE = 0.03
 def test_readme_states_the_collected_number_of_tests():
     """The README says how many tests the suite has: the number ``pytest --collect-only``
     collects (within a few percent, so that adding a test does not fail the suite)."""
-    stated = re.findall(r"The suite has (\d+) tests", README.read_text())
+    stated = re.findall(r"The suite has (\d+)\s+tests", README.read_text())
     assert len(stated) == 1, "the README states the number of tests once"
     proc = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q",
                            "-p", "no:cacheprovider"], cwd=README.parent, capture_output=True,
