@@ -50,8 +50,12 @@ class Plant(Protocol):
     def series(self, steps: int) -> Any:
         """What the plant recorded over the first ``steps`` control periods (None: nothing)."""
 
-    # optional: ``settings(spec) -> dict``, what the run's record says of the plant
-    # (``results.json``: ``plant_settings``); without it, the specification's own settings
+    def settings(self, spec: Any) -> dict[str, Any]:
+        """What the run's record says of the plant (``results.json``: ``plant_settings``).
+
+        ``spec`` is the scenario's :class:`~uvms_qp.sim.plant_config.PlantSpec`.
+        """
+
 
 class RunState:
     """The true configuration a plant keeps between ``start`` and the end of a run."""
@@ -94,3 +98,7 @@ class KinematicPlant(RunState):
     def series(self, steps: int) -> None:
         """Nothing beyond the configuration."""
         return None
+
+    def settings(self, spec: Any) -> dict[str, Any]:
+        """The scenario's plant table as given (nothing of it drives an exact plant)."""
+        return dict(spec.settings())

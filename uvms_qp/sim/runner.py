@@ -232,12 +232,6 @@ def _constraint_violation(constraints: list[Any], state: Any, dt: float, zeta: F
                           np.concatenate([r.upper for r in rows]))
 
 
-def _plant_settings(plant: Any, spec: Any) -> dict[str, Any]:
-    """The values the plant ran with (its ``settings``), else the specification's."""
-    settings = getattr(plant, "settings", None)
-    return dict(spec.settings()) if settings is None else dict(settings(spec))
-
-
 def _measured_state(model: Any, plant: Any, channel: Any, truth: Any) -> Any:
     """The state the controller is given: the sensors' view of the plant (``truth`` if exact)."""
     nu = plant.body_velocity
@@ -481,7 +475,7 @@ def simulate(
         plant=plant.kind,
         dynamics=plant.series(n),
         stopped=stopped,
-        plant_settings=_plant_settings(plant, scenario.plant),
+        plant_settings=plant.settings(scenario.plant),
         sensors=(None if scenario.sensors is None
                  else dataclasses.asdict(scenario.sensors)),
     )

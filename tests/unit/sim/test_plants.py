@@ -130,6 +130,9 @@ class _Diverging:
     def series(self, steps):
         return None
 
+    def settings(self, spec):
+        return self.inner.settings(spec)
+
 
 def test_a_diverging_plant_ends_the_run_keeping_the_steps_before_it(monkeypatch, tmp_path,
                                                                     capsys):
