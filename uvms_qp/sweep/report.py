@@ -157,7 +157,7 @@ def all_bins(entry: dict[str, Any]) -> list[dict[str, Any]]:
 
     The empty bins (no run drew a value in them: an option never drawn, a range between the
     values drawn) have ``runs`` 0 and ``rate`` and ``ci`` None. An entry without ``options`` or
-    ``edges`` (a summary written before they were recorded) gives its non-empty bins.
+    ``edges`` (no recorded run drew the parameter) has no bin.
     """
     bins = entry["bins"]
     if "options" in entry:
