@@ -48,6 +48,8 @@ def hard_feasible(problem: Problem) -> bool:
     """Independent feasibility check of the hard box and rows (HiGHS LP through SciPy)."""
     if (problem.lo[:problem.head] > problem.hi[:problem.head]).any():
         return False  # an empty interval: no LP needed (and SciPy refuses such bounds)
+    if not problem.hard.m:
+        return True  # a box with every interval nonempty: no LP needed
     return _hard_lp(problem).status != 2
 
 
