@@ -34,3 +34,12 @@ def test_hard_rows_are_judged_by_the_lp() -> None:
     point = hard_point(normalize_problem(_levels(n), *box, hard=reachable))
     assert point is not None
     assert abs(point.sum() - 2.5) < 1e-9 and np.all(np.abs(point) <= 1.0 + 1e-12)
+
+
+def test_an_lp_out_of_time_proves_nothing_empty() -> None:
+    n = 3
+    box = -np.ones(n), np.ones(n)
+    unreachable = [(np.ones((1, n)), np.array([3.5]), np.array([3.5]))]
+    problem = normalize_problem(_levels(n), *box, hard=unreachable)
+    assert not hard_feasible(problem, time_limit=10.0)
+    assert hard_feasible(problem, time_limit=0.0)  # stopped before proving the set empty
