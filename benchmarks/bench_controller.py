@@ -66,10 +66,15 @@ def small_stack(traj):
     return tool_posture_stack(EndEffectorTask(trajectory=traj, gain=2.0))
 
 
-def ours_stepper(model, q0, traj, solver, stack=None):
-    """One-tick closure for our controller (state update + step), integrating its own q."""
+def ours_stepper(model, q0, traj, solver, stack=None, deadline="period"):
+    """One-tick closure for our controller (state update + step), integrating its own q.
+
+    ``deadline``: the controller's (default: its period); ``bench_instructions.py`` passes None,
+    since under valgrind a step runs some 50 times slower and would meet a wall-clock deadline
+    that skips stages, so the count would measure the machine's load instead of the work.
+    """
     stack = stack or demo_stack(trajectory=traj)
-    ctrl = Controller(model, stack, solver=solver, dt=DT)
+    ctrl = Controller(model, stack, solver=solver, dt=DT, deadline=deadline)
     box = {"q": q0.copy(), "statuses": {}, "c_times": []}
 
     def tick(k):

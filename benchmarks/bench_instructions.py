@@ -10,7 +10,9 @@ ten million instructions), hence the default of 2000 counted ticks; two runs of 
 then agree within about 1 %. Instructions are not seconds (work in C retires more instructions
 per cycle than the interpreter), so read the ratio next to the wall-clock ratio of
 ``bench_controller.py``, not instead of it. The loops follow their motion for ``W + N`` ticks,
-so a different ``N`` measures a different stretch of it.
+so a different ``N`` measures a different stretch of it. Our controllers run without a deadline
+here: under valgrind a step is some 50 times slower, and a wall-clock deadline (the period,
+50 ms, by default) would skip stages on a loaded machine, so the count would follow the load.
 
 Needs valgrind (Debian: ``apt-get install valgrind``) and Pink (``pip install -e ".[pink]"``).
 Each loop takes about a minute under valgrind.
@@ -69,7 +71,7 @@ def run_loop(which: str, warmup: int, ticks: int) -> None:
     traj = bc.Circle(model.frame_pose(q0, "tool")[:3, 3])
     if which in PARTS:
         # the first ticks of the full loop give realistic states; then one part per tick
-        tick, _, box, ctrl = bc.ours_stepper(model, q0, traj, "daqp")
+        tick, _, box, ctrl = bc.ours_stepper(model, q0, traj, "daqp", deadline=None)
         for k in range(warmup):
             tick(k)
         q, assembler, safe = box["q"], ctrl.assembler, ctrl.safe
@@ -86,12 +88,12 @@ def run_loop(which: str, warmup: int, ticks: int) -> None:
     if which == "pink":
         tick = bc.pink_stepper(model, q0, traj, "daqp")[0]
     elif which == "bare":
-        tick, _, _, ctrl = bc.ours_stepper(model, q0, traj, "daqp")
+        tick, _, _, ctrl = bc.ours_stepper(model, q0, traj, "daqp", deadline=None)
         ctrl.safe.primary.certify = None  # no optimality certificate
         ctrl.assembler.damping = None  # no damping screen
     else:
         stack = bc.small_stack(traj) if which == "small" else None
-        tick = bc.ours_stepper(model, q0, traj, "daqp", stack)[0]
+        tick = bc.ours_stepper(model, q0, traj, "daqp", stack, deadline=None)[0]
     for k in range(warmup + ticks):
         tick(k)
 
