@@ -70,9 +70,11 @@ of the user's problem: a certificate of the user's problem does not apply to it 
 from __future__ import annotations
 
 import math
+import operator
 import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from time import perf_counter
 
 import numpy as np
@@ -89,12 +91,16 @@ from .linalg import logical_or as _logical_or
 from .linalg import max_of as _max
 from .linalg import maximum as _maximum
 from .linalg import minimum as _minimum
+from .linalg import multiply as _multiply
 from .linalg import one_blas_thread
 from .linalg import potrf as _POTRF
 from .linalg import sqrt as _sqrt
 from .linalg import subtract as _subtract
 from .problem import Problem
 from .tolerances import ACTIVE_TOL, RANK_ATOL, RANK_RTOL
+
+#: ``row is not None``, for a C-level loop over a level's rows.
+_IS_SOMETHING = partial(operator.is_not, None)
 
 #: Sets of active rows whose screen structure a problem keeps (the last few).
 _KEEP = 8
@@ -127,7 +133,7 @@ class Damping:
     @property
     def acted(self) -> bool:
         """True when at least one level got damping rows."""
-        return any(r is not None for r in self.rows)
+        return any(map(_IS_SOMETHING, self.rows))
 
     @property
     def damped_levels(self) -> tuple[int, ...]:
@@ -179,13 +185,15 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         setup = _SETUPS[problem] = _Setup(problem, thresholds, dt)
     if setup.last < 0:
         return setup.undamped
-    z = setup.A.dot(x)
-    B = setup.B  # [z - lo; z - hi]
-    _subtract(z, setup.sides, out=B)
-    tol = ACTIVE_TOL * max(1.0, float(_max(_absolute(z, out=z), initial=0.0)))
+    z = setup.A.dot(x, out=setup.z)
+    _subtract(z, setup.sides, out=setup.B)  # [z - lo; z - hi]
+    largest = float(_max(_absolute(z, out=z))) if setup.rows else 0.0
+    tol = ACTIVE_TOL * largest if largest > 1.0 else ACTIVE_TOL  # ACTIVE_TOL max(1, max |z|)
+    setup.tol[()], setup.tol_neg[()] = tol, -tol
     # active: at or beyond a side (an equality row always; an infinite side never)
-    active = _less_equal(setup.below, tol, out=setup.active)
-    _logical_or(active, _greater_equal(setup.above, -tol, out=setup.scratch), out=active)
+    active = _less_equal(setup.below, setup.tol, out=setup.active)
+    _logical_or(active, _greater_equal(setup.above, setup.tol_neg, out=setup.scratch),
+                out=active)
     root = setup.root
     hard = _active_hard(problem, x, root) if problem.mh else None
     mh = 0 if hard is None else hard.shape[0]
@@ -196,7 +204,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     y_norm = math.sqrt(float(x.dot(x) if setup.unit_metric else x.dot(setup.W * x)))
     bounds = _screen(setup, shape, hard, y_norm)
     if bounds is not None:
-        return Damping(setup.nones, (*bounds, *setup.tail))
+        return Damping(setup.nones, tuple(bounds))
     # what each row misses, z - clip(z, lo, hi): z - lo below lo, z - hi above hi
     slack = _add(_minimum(setup.below, 0.0), _maximum(setup.above, 0.0))
     if clock() > end:
@@ -322,8 +330,8 @@ class _Setup:
     """
 
     __slots__ = ("A", "B", "W", "above", "active", "below", "dt", "end", "eps", "head", "last",
-                 "n", "nones", "root", "scratch", "shapes", "sides", "spans", "tail",
-                 "thresholds", "undamped", "unit_metric")
+                 "n", "nones", "root", "rows", "scratch", "shapes", "sides", "spans", "tail",
+                 "thresholds", "tol", "tol_neg", "undamped", "unit_metric", "z")
 
     def __init__(self, problem: Problem, thresholds: Sequence[float], dt: float) -> None:
         p = len(problem.spans)
@@ -342,6 +350,9 @@ class _Setup:
         self.unit_metric = bool((problem.W == 1.0).all())  # y = x: nothing to scale
         self.eps = [float(e) for e in self.thresholds[:last + 1]]
         self.spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+        self.rows = end > head
+        self.z = np.empty(end - head)
+        self.tol, self.tol_neg = np.empty(()), np.empty(())  # of the active rows, and -tol
         self.B = np.empty((2, end - head))
         self.below, self.above = self.B  # z - lo, z - hi
         self.active = np.empty(end - head, dtype=bool)
@@ -363,9 +374,11 @@ class _Active:
     Which rows it stacks, which levels each test covers, and its buffers.
     """
 
-    __slots__ = ("both", "column", "diag", "fit", "fit_active", "fit_sides", "floored",
-                 "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "norms", "rows",
-                 "tall", "tall_diag", "unit", "used")
+    __slots__ = ("above", "below", "both", "column", "diag", "fit", "fit_active", "fit_sides",
+                 "fit_span", "flags", "floored", "gram", "idx", "lead", "lead_diag",
+                 "level_squares", "levels", "mh", "mine", "missed", "norms", "picked", "plan",
+                 "plan_eps", "rows", "shift", "tall", "tall_diag", "template", "unit", "used",
+                 "zeros")
 
     def __init__(self, setup: _Setup, active: np.ndarray, mh: int) -> None:
         n, spans, eps = setup.n, setup.spans, setup.eps
@@ -399,6 +412,23 @@ class _Active:
             start += counts[j]
         self.levels = levels
         self.floored = [j for j in range(fit) if counts[j] and eps[j] > 0.0]
+        kl = self.idx.size  # the level rows picked, and what they miss
+        self.picked = np.empty(2 * kl)  # z - lo, then z - hi
+        self.below, self.above = self.picked[:kl], self.picked[kl:]
+        self.zeros = np.zeros(kl)
+        self.missed = np.empty(kl)
+        self.flags = np.empty(kl, dtype=bool)
+        self.level_squares = self.diag[mh:]  # their squared norms
+        self.shift = np.empty(used)
+        # the levels that fit, each with a threshold and active rows, by their rows in the
+        # level rows picked; the largest threshold among them; the rows of the level after
+        self.plan = [(start - mh, start - mh + c) for j, start, c in levels[:fit]
+                     if c and eps[j] > 0.0]
+        self.plan_eps = max((eps[j] for j in self.floored), default=0.0)
+        if fit < p:
+            _, start, c = levels[fit]
+            self.fit_span = (start - mh, start - mh + c)
+        self.template = [math.inf] * p + [math.nan] * len(setup.tail)  # the bounds
         if fit < p:
             a, b = spans[fit]
             self.fit_sides = (setup.sides[0, a:b], setup.sides[1, a:b])
@@ -435,47 +465,46 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         level needs damping.
     """
     n, p, mh = setup.n, len(setup.spans), shape.mh
-    rows, mine, gram = shape.rows, shape.mine, shape.gram
+    rows, gram = shape.rows, shape.gram
     if mh:
         rows[:mh] = hard
-    setup.A.take(shape.idx, 0, out=mine)
+    setup.A.take(shape.idx, 0, out=shape.mine)
     if not setup.unit_metric:
-        _divide(mine, setup.root, out=mine)  # rows over y
+        _divide(shape.mine, setup.root, out=shape.mine)  # rows over y
     if gram.size:
         _dot(rows, rows.T, out=gram)
-    squares = shape.diag.tolist()  # squared row norms
-    if min(squares, default=1.0) <= 0.0:
+    if not all(shape.diag.tolist()):  # (squared row norms)
         return None  # a zero active row
-    values = setup.B.take(shape.both).tolist()  # z - lo, then z - hi, of the rows picked
-    # what each row misses: z - lo below lo, z - hi above hi
-    k = len(values) // 2
-    missed = [v if v < 0.0 else w if w > 0.0 else 0.0 for v, w in
-              zip(values[:k], values[k:], strict=True)]
+    # what each row picked misses: z - lo below lo, else z - hi above hi
+    setup.B.take(shape.both, out=shape.picked)
+    below, above, zeros, missed = shape.below, shape.above, shape.zeros, shape.missed
+    _minimum(below, zeros, out=missed)
+    _maximum(above, zeros, out=missed, where=_greater_equal(below, zeros, out=shape.flags))
+    # ... over the row's norm, squared: a level's sum is its slack in unit rows, squared
+    _multiply(missed, missed, out=missed)
+    terms = _divide(missed, shape.level_squares, out=missed).tolist()
+    floor = need = SCREEN_RANK  # the least value the directions may have (see _needed)
     eps, dt = setup.eps, setup.dt
-    floors = []  # the least value each level's directions may have (see _needed)
-    for k, start, c in shape.levels:
-        if eps[k] > 0.0 and c:
-            own = math.sqrt(sum(v * v / q for v, q in zip(
-                missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
-            floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
-        else:
-            floors.append(SCREEN_RANK)
+    if shape.plan:  # the levels that fit: the largest threshold and slack of them
+        own = max([sum(terms[a:b]) for a, b in shape.plan])
+        floor = max(SCREEN_RANK, _needed(shape.plan_eps, dt, y_norm, math.sqrt(own)))
     fit, used = shape.fit, shape.used
     overflow = fit < p and used < n  # a level overflows the freedom the ones above leave
     if overflow:  # its test takes the unit rows, before the leading block is shifted
+        if eps[fit] > 0.0:
+            a, b = shape.fit_span
+            need = max(SCREEN_RANK, _needed(eps[fit], dt, y_norm, math.sqrt(sum(terms[a:b]))))
         _sqrt(shape.diag, out=shape.norms)
         unit = _divide(rows, shape.column, out=shape.unit)
-    floor = max(floors[:fit], default=SCREEN_RANK)
     if used:  # the leading block minus floor^2 times its row norms squared
         lead = shape.lead_diag
-        if not _above(shape.lead, floor * floor * lead, lead):
+        if not _above(shape.lead, _multiply(lead, floor * floor, out=shape.shift), lead):
             return None
-    bounds = [math.inf] * p
+    bounds = shape.template.copy()
     for k in shape.floored:
         bounds[k] = floor
     if not overflow:  # every level fits, or no freedom below
         return bounds
-    need = floors[fit]
     tall = _dot(unit.T, unit, out=shape.tall)
     if not _above(tall.T, need * need, shape.tall_diag):  # rank n: no freedom below
         return None
