@@ -114,7 +114,7 @@ DEFAULT_THRESHOLD = 0.05
 SCREEN_RANK = 1e-6
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Damping:
     """The damping rows of each level of a problem, and what they are for.
 
@@ -374,11 +374,10 @@ class _Active:
     Which rows it stacks, which levels each test covers, and its buffers.
     """
 
-    __slots__ = ("above", "below", "both", "column", "diag", "fit", "fit_active", "fit_sides",
-                 "fit_span", "flags", "floored", "gram", "idx", "lead", "lead_diag",
-                 "level_squares", "levels", "mh", "mine", "missed", "norms", "picked", "plan",
-                 "plan_eps", "rows", "shift", "tall", "tall_diag", "template", "unit", "used",
-                 "zeros")
+    __slots__ = ("both", "column", "diag", "fit", "fit_active", "fit_sides", "fit_span",
+                 "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "norms",
+                 "plan", "plan_eps", "rows", "shift", "tall", "tall_diag", "template", "unit",
+                 "used")
 
     def __init__(self, setup: _Setup, active: np.ndarray, mh: int) -> None:
         n, spans, eps = setup.n, setup.spans, setup.eps
@@ -412,13 +411,6 @@ class _Active:
             start += counts[j]
         self.levels = levels
         self.floored = [j for j in range(fit) if counts[j] and eps[j] > 0.0]
-        kl = self.idx.size  # the level rows picked, and what they miss
-        self.picked = np.empty(2 * kl)  # z - lo, then z - hi
-        self.below, self.above = self.picked[:kl], self.picked[kl:]
-        self.zeros = np.zeros(kl)
-        self.missed = np.empty(kl)
-        self.flags = np.empty(kl, dtype=bool)
-        self.level_squares = self.diag[mh:]  # their squared norms
         self.shift = np.empty(used)
         # the levels that fit, each with a threshold and active rows, by their rows in the
         # level rows picked; the largest threshold among them; the rows of the level after
@@ -473,16 +465,15 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         _divide(shape.mine, setup.root, out=shape.mine)  # rows over y
     if gram.size:
         _dot(rows, rows.T, out=gram)
-    if not all(shape.diag.tolist()):  # (squared row norms)
+    squares = shape.diag.tolist()  # squared row norms
+    if not all(squares):
         return None  # a zero active row
-    # what each row picked misses: z - lo below lo, else z - hi above hi
-    setup.B.take(shape.both, out=shape.picked)
-    below, above, zeros, missed = shape.below, shape.above, shape.zeros, shape.missed
-    _minimum(below, zeros, out=missed)
-    _maximum(above, zeros, out=missed, where=_greater_equal(below, zeros, out=shape.flags))
-    # ... over the row's norm, squared: a level's sum is its slack in unit rows, squared
-    _multiply(missed, missed, out=missed)
-    terms = _divide(missed, shape.level_squares, out=missed).tolist()
+    values = setup.B.take(shape.both).tolist()  # z - lo, then z - hi, of the level rows picked
+    k = shape.idx.size
+    # what each of them misses (z - lo below lo, z - hi above hi) over its norm, squared: the
+    # sum over a level's rows is the square of its slack in unit rows
+    terms = [(v * v if v < 0.0 else w * w if w > 0.0 else 0.0) / q for v, w, q in
+             zip(values[:k], values[k:], squares[mh:], strict=True)]
     floor = need = SCREEN_RANK  # the least value the directions may have (see _needed)
     eps, dt = setup.eps, setup.dt
     if shape.plan:  # the levels that fit: the largest threshold and slack of them
