@@ -83,7 +83,6 @@ from .._validation import FloatArray
 from .linalg import absolute as _absolute
 from .linalg import add as _add
 from .linalg import divide as _divide
-from .linalg import dot as _dot
 from .linalg import gesdd as _GESDD
 from .linalg import greater_equal as _greater_equal
 from .linalg import less_equal as _less_equal
@@ -375,7 +374,8 @@ class _Active:
     """
 
     __slots__ = ("both", "column", "diag", "fit", "fit_active", "fit_sides", "fit_span",
-                 "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "norms",
+                 "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "need2",
+                 "norms",
                  "plan", "plan_eps", "rows", "shift", "tall", "tall_diag", "template", "unit",
                  "used")
 
@@ -411,7 +411,8 @@ class _Active:
             start += counts[j]
         self.levels = levels
         self.floored = [j for j in range(fit) if counts[j] and eps[j] > 0.0]
-        self.shift = np.empty(used)
+        self.shift = np.empty(used)  # floor^2 times the squared norms of the leading rows
+        self.need2 = np.empty(())
         # the levels that fit, each with a threshold and active rows, by their rows in the
         # level rows picked; the largest threshold among them; the rows of the level after
         self.plan = [(start - mh, start - mh + c) for j, start, c in levels[:fit]
@@ -464,7 +465,7 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     if not setup.unit_metric:
         _divide(shape.mine, setup.root, out=shape.mine)  # rows over y
     if gram.size:
-        _dot(rows, rows.T, out=gram)
+        rows.dot(rows.T, out=gram)
     squares = shape.diag.tolist()  # squared row norms
     if not all(squares):
         return None  # a zero active row
@@ -496,8 +497,10 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         bounds[k] = floor
     if not overflow:  # every level fits, or no freedom below
         return bounds
-    tall = _dot(unit.T, unit, out=shape.tall)
-    if not _above(tall.T, need * need, shape.tall_diag):  # rank n: no freedom below
+    tall = unit.T.dot(unit, out=shape.tall)
+    need2 = shape.need2
+    need2[()] = need * need
+    if not _above(tall.T, need2, shape.tall_diag):  # rank n: no freedom below
         return None
     if eps[fit] > 0.0:
         low, high = shape.fit_sides
