@@ -102,6 +102,12 @@ _IS_SOMETHING = partial(operator.is_not, None)
 #: Sets of active rows whose screen structure a problem keeps (the last few).
 _KEEP = 8
 
+#: The margin, in squared singular values of unit rows, by which a reference must clear the
+#: screen's thresholds to stand for its tests (:func:`_near`).
+_MARGIN = 1e-8
+#: Calls that run the screen's tests after a reference is dropped, before a new one is taken.
+_WAIT = 8
+
 #: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
 #: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
 #: its directions are damped (dimensionless; a row at about 3 degrees from the span of the others).
@@ -371,11 +377,10 @@ class _Active:
     Which rows it stacks, which levels each test covers, and its buffers.
     """
 
-    __slots__ = ("both", "column", "diag", "fit", "fit_active", "fit_sides", "fit_span",
-                 "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "need2",
-                 "norms",
-                 "plan", "plan_eps", "rows", "shift", "tall", "tall_diag", "template", "unit",
-                 "used")
+    __slots__ = ("both", "column", "delta", "diag", "fit", "fit_active", "fit_sides",
+                 "fit_span", "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh",
+                 "mine", "need2", "norms", "plan", "plan_eps", "reference", "rows", "shift",
+                 "tall", "tall_diag", "template", "unit", "used", "wait")
 
     def __init__(self, setup: _Setup, active: np.ndarray, mh: int) -> None:
         n, spans, eps = setup.n, setup.spans, setup.eps
@@ -411,6 +416,11 @@ class _Active:
         self.floored = [j for j in range(fit) if counts[j] and eps[j] > 0.0]
         self.shift = np.empty(used)  # floor^2 times the squared norms of the leading rows
         self.need2 = np.empty(())
+        # the unit rows that last passed both tests and their least singular values (leading
+        # rows, stack), for the calls after (:func:`_near`)
+        self.reference: tuple[FloatArray, float, float] | None = None
+        self.wait = 0
+        self.delta = np.empty((k, n))
         # the levels that fit, each with a threshold and active rows, by their rows in the
         # level rows picked; the largest threshold among them; the rows of the level after
         self.plan = [(start - mh, start - mh + c) for j, start, c in levels[:fit]
@@ -486,7 +496,10 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
             need = max(SCREEN_RANK, _needed(eps[fit], dt, y_norm, math.sqrt(sum(terms[a:b]))))
         _sqrt(shape.diag, out=shape.norms)
         unit = _divide(rows, shape.column, out=shape.unit)
-    if used:  # the leading block minus floor^2 times its row norms squared
+        proven = shape.reference is not None and _near(shape, unit, floor, need)
+    else:
+        proven = False
+    if used and not proven:  # the leading block minus floor^2 times its row norms squared
         lead = shape.lead_diag
         if not _above(shape.lead, _multiply(lead, floor * floor, out=shape.shift), lead):
             return None
@@ -495,11 +508,13 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         bounds[k] = floor
     if not overflow:  # every level fits, or no freedom below
         return bounds
-    tall = unit.T.dot(unit, out=shape.tall)
-    need2 = shape.need2
-    need2[()] = need * need
-    if not _above(tall.T, need2, shape.tall_diag):  # rank n: no freedom below
-        return None
+    if not proven:
+        tall = unit.T.dot(unit, out=shape.tall)
+        need2 = shape.need2
+        need2[()] = need * need
+        if not _above(tall.T, need2, shape.tall_diag):  # rank n: no freedom below
+            return None
+        _refer(shape, unit)
     if eps[fit] > 0.0:
         low, high = shape.fit_sides
         if low.tobytes() != high.tobytes():  # not every row an equality: which ask for motion
@@ -516,6 +531,48 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
                         return None
         bounds[fit] = need
     return bounds
+
+
+def _near(shape: _Active, unit: FloatArray, floor: float, need: float) -> bool:
+    """Whether the unit rows are close enough to the shape's reference to pass both tests.
+
+    The singular values of the unit rows move by at most ``e = |U - U_ref|_F`` from those of
+    the reference (Weyl), so the leading rows' smallest is above ``s_lead - e`` and the stack's
+    ``n``-th above ``s_tall - e``. When those clear ``floor`` and ``need`` by ``_MARGIN`` (in
+    squares: far above the round-off of a Cholesky factorisation of unit rows), the two tests
+    of :func:`_screen` pass, and they are not run. Otherwise the reference is dropped.
+    """
+    reference, lead, tall = shape.reference  # type: ignore[misc]
+    delta = _subtract(unit, reference, out=shape.delta).reshape(-1)
+    e = math.sqrt(float(delta.dot(delta)))
+    low, high = lead - e, tall - e
+    if high > 0.0 and high * high > need * need + _MARGIN and (
+            not shape.used or (low > 0.0 and low * low > floor * floor + _MARGIN)):
+        return True
+    shape.reference = None
+    return False
+
+
+def _refer(shape: _Active, unit: FloatArray) -> None:
+    """Keep the unit rows that passed both tests and their least singular values (:func:`_near`).
+
+    Not on every call: after a reference is dropped, the next ``_WAIT`` calls that pass run the
+    tests without taking a new one (a reference that does not stand costs two SVDs).
+    """
+    if shape.reference is not None:
+        return
+    if shape.wait:
+        shape.wait -= 1
+        return
+    shape.wait = _WAIT
+    n, used = unit.shape[1], shape.used
+    _, values, _, info = _GESDD(unit, compute_uv=0)
+    lead = math.inf  # (no leading rows: not read)
+    if used and not info:
+        _, lead_values, _, info = _GESDD(unit[:used], compute_uv=0)
+        lead = float(lead_values[used - 1])
+    if not info:
+        shape.reference = (unit.copy(), lead, float(values[n - 1]))
 
 
 def _active_hard(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArray:
