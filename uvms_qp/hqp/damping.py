@@ -377,7 +377,7 @@ class _Active:
     Which rows it stacks, which levels each test covers, and its buffers.
     """
 
-    __slots__ = ("both", "column", "delta", "diag", "fit", "fit_active", "fit_sides",
+    __slots__ = ("both", "column", "delta", "delta_flat", "diag", "fit", "fit_active", "fit_sides",
                  "fit_span", "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh",
                  "mine", "need2", "norms", "plan", "plan_eps", "reference", "rows", "shift",
                  "tall", "tall_diag", "template", "unit", "used", "wait")
@@ -421,6 +421,7 @@ class _Active:
         self.reference: tuple[FloatArray, float, float] | None = None
         self.wait = 0
         self.delta = np.empty((k, n))
+        self.delta_flat = self.delta.reshape(-1)
         # the levels that fit, each with a threshold and active rows, by their rows in the
         # level rows picked; the largest threshold among them; the rows of the level after
         self.plan = [(start - mh, start - mh + c) for j, start, c in levels[:fit]
@@ -496,7 +497,8 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
             need = max(SCREEN_RANK, _needed(eps[fit], dt, y_norm, math.sqrt(sum(terms[a:b]))))
         _sqrt(shape.diag, out=shape.norms)
         unit = _divide(rows, shape.column, out=shape.unit)
-        proven = shape.reference is not None and _near(shape, unit, floor, need)
+        reference = shape.reference
+        proven = reference is not None and _near(shape, reference, unit, floor, need)
     else:
         proven = False
     if used and not proven:  # the leading block minus floor^2 times its row norms squared
@@ -533,7 +535,8 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     return bounds
 
 
-def _near(shape: _Active, unit: FloatArray, floor: float, need: float) -> bool:
+def _near(shape: _Active, reference: tuple[FloatArray, float, float], unit: FloatArray,
+          floor: float, need: float) -> bool:
     """Whether the unit rows are close enough to the shape's reference to pass both tests.
 
     The singular values of the unit rows move by at most ``e = |U - U_ref|_F`` from those of
@@ -542,8 +545,9 @@ def _near(shape: _Active, unit: FloatArray, floor: float, need: float) -> bool:
     squares: far above the round-off of a Cholesky factorisation of unit rows), the two tests
     of :func:`_screen` pass, and they are not run. Otherwise the reference is dropped.
     """
-    reference, lead, tall = shape.reference  # type: ignore[misc]
-    delta = _subtract(unit, reference, out=shape.delta).reshape(-1)
+    rows, lead, tall = reference
+    _subtract(unit, rows, out=shape.delta)
+    delta = shape.delta_flat
     e = math.sqrt(float(delta.dot(delta)))
     low, high = lead - e, tall - e
     if high > 0.0 and high * high > need * need + _MARGIN and (
