@@ -80,12 +80,14 @@ from time import perf_counter
 import numpy as np
 
 from .._validation import FloatArray
+from .linalg import absolute as _absolute
 from .linalg import add as _add
 from .linalg import divide as _divide
 from .linalg import gesdd as _GESDD
 from .linalg import greater_equal as _greater_equal
 from .linalg import less_equal as _less_equal
 from .linalg import logical_or as _logical_or
+from .linalg import max_of as _max
 from .linalg import maximum as _maximum
 from .linalg import minimum as _minimum
 from .linalg import multiply as _multiply
@@ -190,8 +192,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         return setup.undamped
     z = setup.A.dot(x, out=setup.z)
     _subtract(z, setup.sides, out=setup.B)  # [z - lo; z - hi]
-    values = z.tolist()  # max |z| from the extremes (a numpy reduction costs more)
-    largest = max(max(values), -min(values)) if values else 0.0
+    largest = float(_max(_absolute(z, out=z))) if setup.rows else 0.0
     tol = ACTIVE_TOL * largest if largest > 1.0 else ACTIVE_TOL  # ACTIVE_TOL max(1, max |z|)
     setup.tol[()], setup.tol_neg[()] = tol, -tol
     # active: at or beyond a side (an equality row always; an infinite side never)
@@ -334,7 +335,7 @@ class _Setup:
     """
 
     __slots__ = ("A", "B", "W", "above", "active", "below", "dt", "end", "eps", "head", "last",
-                 "n", "nones", "root", "scratch", "shapes", "sides", "spans", "tail",
+                 "n", "nones", "root", "rows", "scratch", "shapes", "sides", "spans", "tail",
                  "thresholds", "tol", "tol_neg", "undamped", "unit_metric", "z")
 
     def __init__(self, problem: Problem, thresholds: Sequence[float], dt: float) -> None:
@@ -354,6 +355,7 @@ class _Setup:
         self.unit_metric = bool((problem.W == 1.0).all())  # y = x: nothing to scale
         self.eps = [float(e) for e in self.thresholds[:last + 1]]
         self.spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+        self.rows = end > head
         self.z = np.empty(end - head)
         self.tol, self.tol_neg = np.empty(()), np.empty(())  # of the active rows, and -tol
         self.B = np.empty((2, end - head))
