@@ -54,12 +54,16 @@ Cost: a screen first tests all the levels at once against lower bounds on their 
 :func:`_screen`). Away from singularities it proves that no direction is weak and nothing else is
 computed; otherwise the levels are examined one by one as above. What does not change between
 calls (views of the level rows and sides, ``W^(1/2)``, the thresholds, and per set of active rows
-the indices of the rows stacked and the buffers of the Gram matrices) is kept per problem, so a
-call that the screen settles is about twenty numpy and LAPACK calls: on the demo stack (4 levels,
-33 rows, 10 variables) about 215 k instructions, a third of them deciding the active rows. A
-problem the screen cannot settle (rows that depend on the rows above, a level near its threshold)
-costs one or two SVDs per level on top, with the bookkeeping on Python lists of the few rows
-involved (the bundled demo scenario, whose ten active rows in ten variables include one that
+the indices of the rows stacked, the buffers of the Gram matrices and, for a set whose rows
+overflow the freedom, the unit rows that last passed both factorisations with their least
+singular values) is kept per problem. Rows move little from one control period to the next:
+while the unit rows stay within the margin of those kept (Weyl's inequality), the two
+factorisations would pass and are not run (:func:`_near`). A call that the screen settles is
+then about twenty numpy calls and one Python pass over the rows picked: on the demo stack (4
+levels, 33 rows, 10 variables) about 150 k instructions, a third of them deciding the active rows.
+A problem the screen cannot settle (rows that depend on the rows above, a level near its
+threshold) costs one or two SVDs per level on top, with the bookkeeping on Python lists of the few
+rows involved (the bundled demo scenario, whose ten active rows in ten variables include one that
 depends on the others, takes that way on two steps in three; figures in ``docs/developer.md``).
 
 A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
@@ -376,7 +380,8 @@ class _Setup:
 class _Active:
     """The screen's structure for one set of active rows (see :func:`_screen`).
 
-    Which rows it stacks, which levels each test covers, and its buffers.
+    Which rows it stacks, which levels each test covers, its buffers, and the unit rows that
+    last passed both tests with their least singular values (:func:`_near`).
     """
 
     __slots__ = ("both", "column", "delta", "delta_flat", "diag", "fit", "fit_active", "fit_sides",
@@ -454,7 +459,10 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     the rows above it (its rows that ask for motion too, when they are fewer), and when those
     rows have rank ``n`` the levels below have no freedom. Each test is a Cholesky
     factorisation of a Gram matrix (:func:`_above`) at the least value that rules out a weak
-    direction of every level it covers (:func:`_needed`, with the level's slack).
+    direction of every level it covers (:func:`_needed`, with the largest threshold and slack of
+    the levels it covers: ``_needed`` grows with both, so that is the largest of their values).
+    When the rows overflow and stay near the unit rows that last passed both tests, the kept
+    singular values prove the two tests (:func:`_near`) and they are not run.
 
     Args:
         setup: The problem's views, thresholds and buffers.
@@ -464,9 +472,9 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         y_norm: ``|W^(1/2) x|``.
 
     Returns:
-        Per level a proven lower bound on its smallest singular value (``inf`` for a level
-        without active rows in the freedom left), or None when the tests cannot prove that no
-        level needs damping.
+        Per level of the problem a proven lower bound on its smallest singular value (``inf``
+        for a level without active rows in the freedom left, NaN below the last level with a
+        threshold), or None when the tests cannot prove that no level needs damping.
     """
     n, p, mh = setup.n, len(setup.spans), shape.mh
     rows, gram = shape.rows, shape.gram
