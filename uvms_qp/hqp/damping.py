@@ -54,12 +54,16 @@ Cost: a screen first tests all the levels at once against lower bounds on their 
 :func:`_screen`). Away from singularities it proves that no direction is weak and nothing else is
 computed; otherwise the levels are examined one by one as above. What does not change between
 calls (views of the level rows and sides, ``W^(1/2)``, the thresholds, and per set of active rows
-the indices of the rows stacked and the buffers of the Gram matrices) is kept per problem, so a
-call that the screen settles is about twenty numpy and LAPACK calls: on the demo stack (4 levels,
-33 rows, 10 variables) about 215 k instructions, a third of them deciding the active rows. A
-problem the screen cannot settle (rows that depend on the rows above, a level near its threshold)
-costs one or two SVDs per level on top, with the bookkeeping on Python lists of the few rows
-involved (the bundled demo scenario, whose ten active rows in ten variables include one that
+the indices of the rows stacked, the buffers of the Gram matrices and, for a set whose rows
+overflow the freedom, the unit rows that last passed both factorisations with their least
+singular values) is kept per problem. Rows move little from one control period to the next:
+while the unit rows stay within the margin of those kept (Weyl's inequality), the two
+factorisations would pass and are not run (:func:`_near`). A call that the screen settles is
+then about twenty numpy calls and one Python pass over the rows picked: on the demo stack (4
+levels, 33 rows, 10 variables) about 150 k instructions, a third of them deciding the active rows.
+A problem the screen cannot settle (rows that depend on the rows above, a level near its
+threshold) costs one or two SVDs per level on top, with the bookkeeping on Python lists of the few
+rows involved (the bundled demo scenario, whose ten active rows in ten variables include one that
 depends on the others, takes that way on two steps in three; figures in ``docs/developer.md``).
 
 A damped level's answer is the lexicographic optimum of the problem with the damping rows, not
@@ -70,9 +74,11 @@ of the user's problem: a certificate of the user's problem does not apply to it 
 from __future__ import annotations
 
 import math
+import operator
 import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from time import perf_counter
 
 import numpy as np
@@ -81,7 +87,6 @@ from .._validation import FloatArray
 from .linalg import absolute as _absolute
 from .linalg import add as _add
 from .linalg import divide as _divide
-from .linalg import dot as _dot
 from .linalg import gesdd as _GESDD
 from .linalg import greater_equal as _greater_equal
 from .linalg import less_equal as _less_equal
@@ -89,6 +94,7 @@ from .linalg import logical_or as _logical_or
 from .linalg import max_of as _max
 from .linalg import maximum as _maximum
 from .linalg import minimum as _minimum
+from .linalg import multiply as _multiply
 from .linalg import one_blas_thread
 from .linalg import potrf as _POTRF
 from .linalg import sqrt as _sqrt
@@ -96,8 +102,17 @@ from .linalg import subtract as _subtract
 from .problem import Problem
 from .tolerances import ACTIVE_TOL, RANK_ATOL, RANK_RTOL
 
+#: ``row is not None``, for a C-level loop over a level's rows.
+_IS_SOMETHING = partial(operator.is_not, None)
+
 #: Sets of active rows whose screen structure a problem keeps (the last few).
 _KEEP = 8
+
+#: The margin, in squared singular values of unit rows, by which a reference must clear the
+#: screen's thresholds to stand for its tests (:func:`_near`).
+_MARGIN = 1e-8
+#: Calls that run the screen's tests after a reference is dropped, before a new one is taken.
+_WAIT = 8
 
 #: The library's damping threshold ``epsilon`` of every level (``Controller(damping=...)``): the
 #: singular value of a level's unit-norm rows, in the freedom the levels above leave, below which
@@ -108,7 +123,7 @@ DEFAULT_THRESHOLD = 0.05
 SCREEN_RANK = 1e-6
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Damping:
     """The damping rows of each level of a problem, and what they are for.
 
@@ -127,7 +142,7 @@ class Damping:
     @property
     def acted(self) -> bool:
         """True when at least one level got damping rows."""
-        return any(r is not None for r in self.rows)
+        return any(map(_IS_SOMETHING, self.rows))
 
     @property
     def damped_levels(self) -> tuple[int, ...]:
@@ -179,13 +194,20 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
         setup = _SETUPS[problem] = _Setup(problem, thresholds, dt)
     if setup.last < 0:
         return setup.undamped
-    z = setup.A.dot(x)
-    B = setup.B  # [z - lo; z - hi]
-    _subtract(z, setup.sides, out=B)
-    tol = ACTIVE_TOL * max(1.0, float(_max(_absolute(z, out=z), initial=0.0)))
+    z = setup.A.dot(x, out=setup.z)
+    _subtract(z, setup.sides, out=setup.B)  # [z - lo; z - hi]
+    # ACTIVE_TOL max(1, max |z|): |z|^2 < 0.99 proves max |z| < 1 with a dot product (the
+    # round-off of the sum is far below the gap), cheaper than the reduction
+    if float(z.dot(z)) < 0.99:
+        tol = ACTIVE_TOL
+    else:
+        largest = float(_max(_absolute(z, out=z)))
+        tol = ACTIVE_TOL * largest if largest > 1.0 else ACTIVE_TOL
+    setup.tol[()], setup.tol_neg[()] = tol, -tol
     # active: at or beyond a side (an equality row always; an infinite side never)
-    active = _less_equal(setup.below, tol, out=setup.active)
-    _logical_or(active, _greater_equal(setup.above, -tol, out=setup.scratch), out=active)
+    active = _less_equal(setup.below, setup.tol, out=setup.active)
+    _logical_or(active, _greater_equal(setup.above, setup.tol_neg, out=setup.scratch),
+                out=active)
     root = setup.root
     hard = _active_hard(problem, x, root) if problem.mh else None
     mh = 0 if hard is None else hard.shape[0]
@@ -196,7 +218,7 @@ def level_damping(problem: Problem, x: FloatArray, thresholds: Sequence[float],
     y_norm = math.sqrt(float(x.dot(x) if setup.unit_metric else x.dot(setup.W * x)))
     bounds = _screen(setup, shape, hard, y_norm)
     if bounds is not None:
-        return Damping(setup.nones, (*bounds, *setup.tail))
+        return Damping(setup.nones, tuple(bounds))
     # what each row misses, z - clip(z, lo, hi): z - lo below lo, z - hi above hi
     slack = _add(_minimum(setup.below, 0.0), _maximum(setup.above, 0.0))
     if clock() > end:
@@ -323,7 +345,7 @@ class _Setup:
 
     __slots__ = ("A", "B", "W", "above", "active", "below", "dt", "end", "eps", "head", "last",
                  "n", "nones", "root", "scratch", "shapes", "sides", "spans", "tail",
-                 "thresholds", "undamped", "unit_metric")
+                 "thresholds", "tol", "tol_neg", "undamped", "unit_metric", "z")
 
     def __init__(self, problem: Problem, thresholds: Sequence[float], dt: float) -> None:
         p = len(problem.spans)
@@ -342,6 +364,8 @@ class _Setup:
         self.unit_metric = bool((problem.W == 1.0).all())  # y = x: nothing to scale
         self.eps = [float(e) for e in self.thresholds[:last + 1]]
         self.spans = [(a - head, b - head) for a, b in problem.spans[:last + 1]]
+        self.z = np.empty(end - head)
+        self.tol, self.tol_neg = np.empty(()), np.empty(())  # of the active rows, and -tol
         self.B = np.empty((2, end - head))
         self.below, self.above = self.B  # z - lo, z - hi
         self.active = np.empty(end - head, dtype=bool)
@@ -360,12 +384,14 @@ class _Setup:
 class _Active:
     """The screen's structure for one set of active rows (see :func:`_screen`).
 
-    Which rows it stacks, which levels each test covers, and its buffers.
+    Which rows it stacks, which levels each test covers, its buffers, and the unit rows that
+    last passed both tests with their least singular values (:func:`_near`).
     """
 
-    __slots__ = ("both", "column", "diag", "fit", "fit_active", "fit_sides", "floored",
-                 "gram", "idx", "lead", "lead_diag", "levels", "mh", "mine", "norms", "rows",
-                 "tall", "tall_diag", "unit", "used")
+    __slots__ = ("both", "column", "delta", "delta_flat", "diag", "fit", "fit_active", "fit_sides",
+                 "fit_span", "floored", "gram", "idx", "lead", "lead_diag", "levels", "mh",
+                 "mine", "need2", "norms", "plan", "plan_eps", "reference", "rows", "shift",
+                 "tall", "tall_diag", "template", "unit", "used", "wait")
 
     def __init__(self, setup: _Setup, active: np.ndarray, mh: int) -> None:
         n, spans, eps = setup.n, setup.spans, setup.eps
@@ -399,6 +425,23 @@ class _Active:
             start += counts[j]
         self.levels = levels
         self.floored = [j for j in range(fit) if counts[j] and eps[j] > 0.0]
+        self.shift = np.empty(used)  # floor^2 times the squared norms of the leading rows
+        self.need2 = np.empty(())
+        # the unit rows that last passed both tests and their least singular values (leading
+        # rows, stack), for the calls after (:func:`_near`)
+        self.reference: tuple[FloatArray, float, float] | None = None
+        self.wait = 0
+        self.delta = np.empty((k, n))
+        self.delta_flat = self.delta.reshape(-1)
+        # the levels that fit, each with a threshold and active rows, by their rows in the
+        # level rows picked; the largest threshold among them; the rows of the level after
+        self.plan = [(start - mh, start - mh + c) for j, start, c in levels[:fit]
+                     if c and eps[j] > 0.0]
+        self.plan_eps = max((eps[j] for j in self.floored), default=0.0)
+        if fit < p:
+            _, start, c = levels[fit]
+            self.fit_span = (start - mh, start - mh + c)
+        self.template = [math.inf] * p + [math.nan] * len(setup.tail)  # the bounds
         if fit < p:
             a, b = spans[fit]
             self.fit_sides = (setup.sides[0, a:b], setup.sides[1, a:b])
@@ -420,7 +463,10 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
     the rows above it (its rows that ask for motion too, when they are fewer), and when those
     rows have rank ``n`` the levels below have no freedom. Each test is a Cholesky
     factorisation of a Gram matrix (:func:`_above`) at the least value that rules out a weak
-    direction of every level it covers (:func:`_needed`, with the level's slack).
+    direction of every level it covers (:func:`_needed`, with the largest threshold and slack of
+    the levels it covers: ``_needed`` grows with both, so that is the largest of their values).
+    When the rows overflow and stay near the unit rows that last passed both tests, the kept
+    singular values prove the two tests (:func:`_near`) and they are not run.
 
     Args:
         setup: The problem's views, thresholds and buffers.
@@ -430,55 +476,61 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
         y_norm: ``|W^(1/2) x|``.
 
     Returns:
-        Per level a proven lower bound on its smallest singular value (``inf`` for a level
-        without active rows in the freedom left), or None when the tests cannot prove that no
-        level needs damping.
+        Per level of the problem a proven lower bound on its smallest singular value (``inf``
+        for a level without active rows in the freedom left, NaN below the last level with a
+        threshold), or None when the tests cannot prove that no level needs damping.
     """
     n, p, mh = setup.n, len(setup.spans), shape.mh
-    rows, mine, gram = shape.rows, shape.mine, shape.gram
+    rows, gram = shape.rows, shape.gram
     if mh:
         rows[:mh] = hard
-    setup.A.take(shape.idx, 0, out=mine)
+    setup.A.take(shape.idx, 0, out=shape.mine)
     if not setup.unit_metric:
-        _divide(mine, setup.root, out=mine)  # rows over y
+        _divide(shape.mine, setup.root, out=shape.mine)  # rows over y
     if gram.size:
-        _dot(rows, rows.T, out=gram)
+        rows.dot(rows.T, out=gram)
     squares = shape.diag.tolist()  # squared row norms
-    if min(squares, default=1.0) <= 0.0:
+    if not all(squares):
         return None  # a zero active row
-    values = setup.B.take(shape.both).tolist()  # z - lo, then z - hi, of the rows picked
-    # what each row misses: z - lo below lo, z - hi above hi
-    k = len(values) // 2
-    missed = [v if v < 0.0 else w if w > 0.0 else 0.0 for v, w in
-              zip(values[:k], values[k:], strict=True)]
+    values = setup.B.take(shape.both).tolist()  # z - lo, then z - hi, of the level rows picked
+    k = shape.idx.size
+    # what each of them misses (z - lo below lo, z - hi above hi) over its norm, squared: the
+    # sum over a level's rows is the square of its slack in unit rows
+    terms = [(v * v if v < 0.0 else w * w if w > 0.0 else 0.0) / q for v, w, q in
+             zip(values[:k], values[k:], squares[mh:], strict=True)]
+    floor = need = SCREEN_RANK  # the least value the directions may have (see _needed)
     eps, dt = setup.eps, setup.dt
-    floors = []  # the least value each level's directions may have (see _needed)
-    for k, start, c in shape.levels:
-        if eps[k] > 0.0 and c:
-            own = math.sqrt(sum(v * v / q for v, q in zip(
-                missed[start - mh:start - mh + c], squares[start:start + c], strict=True)))
-            floors.append(max(SCREEN_RANK, _needed(eps[k], dt, y_norm, own)))
-        else:
-            floors.append(SCREEN_RANK)
+    if shape.plan:  # the levels that fit: the largest threshold and slack of them
+        own = max([sum(terms[a:b]) for a, b in shape.plan])
+        floor = max(SCREEN_RANK, _needed(shape.plan_eps, dt, y_norm, math.sqrt(own)))
     fit, used = shape.fit, shape.used
     overflow = fit < p and used < n  # a level overflows the freedom the ones above leave
     if overflow:  # its test takes the unit rows, before the leading block is shifted
+        if eps[fit] > 0.0:
+            a, b = shape.fit_span
+            need = max(SCREEN_RANK, _needed(eps[fit], dt, y_norm, math.sqrt(sum(terms[a:b]))))
         _sqrt(shape.diag, out=shape.norms)
         unit = _divide(rows, shape.column, out=shape.unit)
-    floor = max(floors[:fit], default=SCREEN_RANK)
-    if used:  # the leading block minus floor^2 times its row norms squared
+        reference = shape.reference
+        proven = reference is not None and _near(shape, reference, unit, floor, need)
+    else:
+        proven = False
+    if used and not proven:  # the leading block minus floor^2 times its row norms squared
         lead = shape.lead_diag
-        if not _above(shape.lead, floor * floor * lead, lead):
+        if not _above(shape.lead, _multiply(lead, floor * floor, out=shape.shift), lead):
             return None
-    bounds = [math.inf] * p
+    bounds = shape.template.copy()
     for k in shape.floored:
         bounds[k] = floor
     if not overflow:  # every level fits, or no freedom below
         return bounds
-    need = floors[fit]
-    tall = _dot(unit.T, unit, out=shape.tall)
-    if not _above(tall.T, need * need, shape.tall_diag):  # rank n: no freedom below
-        return None
+    if not proven:
+        tall = unit.T.dot(unit, out=shape.tall)
+        need2 = shape.need2
+        need2[()] = need * need
+        if not _above(tall.T, need2, shape.tall_diag):  # rank n: no freedom below
+            return None
+        _refer(shape, unit)
     if eps[fit] > 0.0:
         low, high = shape.fit_sides
         if low.tobytes() != high.tobytes():  # not every row an equality: which ask for motion
@@ -495,6 +547,50 @@ def _screen(setup: _Setup, shape: _Active, hard: FloatArray | None, y_norm: floa
                         return None
         bounds[fit] = need
     return bounds
+
+
+def _near(shape: _Active, reference: tuple[FloatArray, float, float], unit: FloatArray,
+          floor: float, need: float) -> bool:
+    """Whether the unit rows are close enough to the shape's reference to pass both tests.
+
+    The singular values of the unit rows move by at most ``e = |U - U_ref|_F`` from those of
+    the reference (Weyl), so the leading rows' smallest is above ``s_lead - e`` and the stack's
+    ``n``-th above ``s_tall - e``. When those clear ``floor`` and ``need`` by ``_MARGIN`` (in
+    squares: far above the round-off of a Cholesky factorisation of unit rows), the two tests
+    of :func:`_screen` pass, and they are not run. Otherwise the reference is dropped.
+    """
+    rows, lead, tall = reference
+    _subtract(unit, rows, out=shape.delta)
+    delta = shape.delta_flat
+    e = math.sqrt(float(delta.dot(delta)))
+    low, high = lead - e, tall - e
+    if high > 0.0 and high * high > need * need + _MARGIN and (
+            not shape.used or (low > 0.0 and low * low > floor * floor + _MARGIN)):
+        return True
+    shape.reference = None
+    return False
+
+
+def _refer(shape: _Active, unit: FloatArray) -> None:
+    """Keep the unit rows that passed both tests and their least singular values (:func:`_near`).
+
+    Not on every call: after a reference is dropped, the next ``_WAIT`` calls that pass run the
+    tests without taking a new one (a reference that does not stand costs two SVDs).
+    """
+    if shape.reference is not None:
+        return
+    if shape.wait:
+        shape.wait -= 1
+        return
+    shape.wait = _WAIT
+    n, used = unit.shape[1], shape.used
+    _, values, _, info = _GESDD(unit, compute_uv=0)
+    lead = math.inf  # (no leading rows: not read)
+    if used and not info:
+        _, lead_values, _, info = _GESDD(unit[:used], compute_uv=0)
+        lead = float(lead_values[used - 1])
+    if not info:
+        shape.reference = (unit.copy(), lead, float(values[n - 1]))
 
 
 def _active_hard(problem: Problem, x: FloatArray, root: FloatArray) -> FloatArray:

@@ -371,3 +371,33 @@ def test_what_a_problem_keeps_between_calls_follows_its_rows_sides_and_metric():
         assert kept.sigma_min == pytest.approx(fresh.sigma_min, nan_ok=True, rel=0, abs=0)
         for a, b in zip(kept.rows, fresh.rows, strict=True):
             assert (a is None and b is None) or np.array_equal(a, b)
+
+
+def test_a_kept_reference_gives_what_the_tests_give():
+    """Rows drifting slowly through an overflowing set of active rows, the two leading ones onto
+    each other and away again: the unit rows a problem keeps from the last passed tests (which stand
+    for the tests while the rows stay near them) give, call after call, what a fresh copy of
+    the problem gives, damping rows and bounds alike."""
+    from uvms_qp.hqp import damping
+
+    rng = np.random.default_rng(11)
+    n, sizes = 5, [2, 6]  # two rows that fit, then six that overflow the freedom left
+    blocks = [(rng.normal(size=(m, n)), np.zeros(m), np.zeros(m)) for m in sizes]
+    problem = normalize_problem([[b] for b in blocks])
+    rows, head = problem.A[n:], problem.head
+    start = rows.copy()
+    stood = 0
+    for step in range(90):
+        rows[...] = start + 1e-3 * step * rng.normal(size=rows.shape)
+        if 30 <= step < 60:  # the second row moves onto the first, and back
+            rows[1] = rows[0] + (abs(step - 45) / 15 + 1e-3) * start[1]
+        problem.lo[head:] = problem.hi[head:] = rng.normal(size=problem.M - head)
+        x = rng.normal(size=n)
+        kept = level_damping(problem, x, (EPS, EPS), 0.05)
+        fresh = level_damping(problem.copy(), x, (EPS, EPS), 0.05)
+        assert kept.sigma_min == pytest.approx(fresh.sigma_min, nan_ok=True, rel=0, abs=0)
+        for a, b in zip(kept.rows, fresh.rows, strict=True):
+            assert (a is None and b is None) or np.array_equal(a, b)
+        shapes = damping._SETUPS[problem].shapes.values()
+        stood += any(shape.reference is not None for shape in shapes)
+    assert stood > 15  # the kept unit rows stood for the tests on many calls
