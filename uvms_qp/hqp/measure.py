@@ -78,13 +78,17 @@ def measure(problem: Problem, x: FloatArray) -> Measured:
 
 
 def _largest(s: FloatArray) -> tuple[float, int]:
-    """``max |s|`` (inf if any entry is NaN) and its index (-1 when ``s`` is empty)."""
+    """``max |s|`` (inf if any entry is NaN) and its index (-1 when ``s`` is empty).
+
+    ``argmax`` takes NaN for the largest value (the index of the first NaN), so a NaN anywhere
+    is the entry it returns.
+    """
     if not s.size:
         return 0.0, -1
     a = np.abs(s)
-    i = int(np.argmax(a))
+    i = int(a.argmax())
     v = float(a[i])
-    return (math.inf if v != v or np.isnan(a).any() else v), i
+    return (math.inf if v != v else v), i
 
 
 def hard_violation(x: FloatArray, lower: FloatArray, upper: FloatArray,
