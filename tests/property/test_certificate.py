@@ -15,7 +15,8 @@ from tests.support.oracle.lexicographic import Oracle
 from uvms_qp.bench.problems import family
 from uvms_qp.hqp import HierarchySolver, normalize_problem
 from uvms_qp.hqp.backends.daqp_binding import open_daqp
-from uvms_qp.hqp.certificate import CERTIFIED, IMPROVABLE, MET, Certifier, certify, repair
+from uvms_qp.hqp.certificate import CERTIFIED, IMPROVABLE, MET, Certifier, certify, repair, slacks
+from uvms_qp.hqp.measure import measure
 
 #: families where the lexicographic optimum is well posed (a 1e-9 change of a higher level
 #: cannot buy a lower one more than 1e-6), so certificate and oracle must agree exactly
@@ -119,3 +120,22 @@ def test_a_point_outside_the_box_is_not_certified():
     problem = normalize_problem([[(a, [0.5])]], lower=[-1, -1], upper=[1, 1])
     cert = certify(problem, np.array([1.5, 0.0]), least_distance=open_daqp)
     assert not cert.inside and not cert.ok
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_point_is_not_certified_with_or_without_the_measurement(bad):
+    """The certificate reads x's finiteness from a finite hard violation of its slacks; the
+    slacks of a non-finite x carry it (inf or NaN on the box rows), so no path certifies it."""
+    a = np.array([[1.0, 1.0]])
+    for box in (1.0, np.inf):
+        problem = normalize_problem([[(a, [5.0])]], lower=[-box, -box], upper=[box, box])
+        x = np.array([bad, 0.0])
+        with np.errstate(all="ignore"):
+            s = slacks(problem, x)
+            measured = measure(problem, x)[0]
+            hv = float(np.abs(s[:problem.n]).max())
+            assert not hv < np.inf
+            certifier = Certifier(open_daqp)
+            for cert in (certifier(problem, x), certifier(problem, x, s),
+                         certifier(problem, x, measured, None, hv)):
+                assert not cert.ok and not cert.inside

@@ -79,6 +79,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from operator import itemgetter
 from time import perf_counter
 from typing import Any, NamedTuple, Protocol
 
@@ -97,6 +98,9 @@ ILL_POSED = "ill_posed"
 IMPROVABLE = "improvable"
 UNPROVEN = "unproven"
 LATE = "late"
+#: The verdicts that prove a level (``LevelCertificate.ok``).
+_PROVEN = frozenset((MET, CERTIFIED))
+_VERDICT = itemgetter(1)  # a LevelCertificate's verdict (one C call per level, no frame)
 
 #: DAQP's settings for the least-distance problems (H = I needs no proximal term)
 _LDP_SETTINGS = {"primal_tol": 1e-8, "eps_prox": 0.0, "iter_limit": 2000, "time_limit": 0.0}
@@ -134,7 +138,7 @@ class LevelCertificate(NamedTuple):
     @property
     def ok(self) -> bool:
         """True when the level is met or certified."""
-        return self.verdict in (MET, CERTIFIED)
+        return self.verdict in _PROVEN
 
 
 class Certificate(NamedTuple):
@@ -153,7 +157,7 @@ class Certificate(NamedTuple):
     @property
     def ok(self) -> bool:
         """True when x is inside the hard set and every level is met or certified."""
-        return self.inside and all(c.ok for c in self.levels)
+        return self.inside and _PROVEN.issuperset(map(_VERDICT, self.levels))
 
     @property
     def first_failure(self) -> int | None:
@@ -479,13 +483,20 @@ class Certifier:
             x: The answer, shape (n,).
             s: ``slacks(problem, x)`` when the caller has them (the measurement's).
             residuals: The level residuals ``rho_k`` when the caller has them.
-            hard_violation: ``max |s|`` over the box and hard rows when the caller has it.
+            hard_violation: ``max |s|`` over the box and hard rows when the caller has it
+                (``inf`` when one is not finite); finite, with ``s``, it also says that ``x`` is
+                finite (the box rows are the identity: ``s`` of a non-finite ``x_j`` is inf or
+                NaN).
             level_scales: Per level ``problem.level_scale(k)`` where the caller has it, else None
                 (the measurement's, for the levels above its bare tolerance).
         """
         n, p = problem.n, len(problem.sizes)
         x = np.asarray(x, dtype=np.float64)
-        if x.shape != (n,) or not math.isfinite(float(x.dot(x))):
+        # x is finite when the caller's slacks of the box rows are (a finite hard violation
+        # with its slacks, as the measurement hands them on); else it is checked here
+        if x.shape != (n,) or not (
+                (s is not None and hard_violation is not None and hard_violation < math.inf)
+                or math.isfinite(float(x.dot(x)))):
             return Certificate(tuple(LevelCertificate(k, UNPROVEN, math.inf, math.inf, math.inf)
                                      for k in range(p)), math.inf, False)
         if s is None:

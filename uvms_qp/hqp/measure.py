@@ -78,13 +78,17 @@ def measure(problem: Problem, x: FloatArray) -> Measured:
 
 
 def _largest(s: FloatArray) -> tuple[float, int]:
-    """``max |s|`` (inf if any entry is NaN) and its index (-1 when ``s`` is empty)."""
+    """``max |s|`` (inf if any entry is NaN) and its index (-1 when ``s`` is empty).
+
+    ``argmax`` takes NaN for the largest value (the index of the first NaN), so a NaN anywhere
+    is the entry it returns.
+    """
     if not s.size:
         return 0.0, -1
     a = np.abs(s)
-    i = int(np.argmax(a))
+    i = int(a.argmax())
     v = float(a[i])
-    return (math.inf if v != v or np.isnan(a).any() else v), i
+    return (math.inf if v != v else v), i
 
 
 def hard_violation(x: FloatArray, lower: FloatArray, upper: FloatArray,
@@ -203,12 +207,18 @@ def evaluate(problem: Problem, x: Any, claim: Status, solver: str, message: str 
             status = _OPTIMAL
             # a level's scale only where its residual exceeds the bare tolerance (kept for the
             # certificate, which judges the same levels)
-            scales: list[float | None] = [
-                problem.level_scale(k) if r > level_tol else None
-                for k, r in enumerate(residuals)]
-            unmet = tuple(k for k, (r, scale) in enumerate(zip(residuals, scales, strict=True))
-                          if scale is not None and r > level_tol * scale)
-            if unmet:
+            scales: list[float | None] = []
+            unmet_levels = []
+            for k, r in enumerate(residuals):
+                if r > level_tol:
+                    scale = problem.level_scale(k)
+                    if r > level_tol * scale:
+                        unmet_levels.append(k)
+                    scales.append(scale)
+                else:
+                    scales.append(None)
+            if unmet_levels:
+                unmet = tuple(unmet_levels)
                 infeasible = unmet[0]
             if infeasible is not None and certify is not None:
                 cert = certify(problem, x, s, residuals, hv, scales)
