@@ -179,7 +179,7 @@ def test_weighted_scheme_falls_back_to_a_weight_honouring_cascade(reference):
     qs, _ = reference
     sc, stack = demo()
     ctrl = Controller(sc.model, stack, dt=sc.dt, metric=sc.metric, scheme="weighted",
-                      priority_ratio=100.0)
+                      priority_ratio=100.0, deadline=None)  # the stages, not the machine's load
     assert ctrl.solver_name == "cascade:daqp"
     assert ctrl.safe.alternate.name.startswith("cascade:")
     clean = ctrl.step(sc.model.state(qs[K]), K * sc.dt)
@@ -203,7 +203,8 @@ def test_every_scheme_runs_under_the_same_guard(scheme, solver, fault):
 
     def controller():
         stack = tool_posture_stack(EndEffectorTask(position=[0.55, 0.12, 0.05], gain=1.0))
-        return Controller(model, stack, solver=solver, dt=0.05, scheme=scheme)
+        return Controller(model, stack, solver=solver, dt=0.05, scheme=scheme,
+                          deadline=None)  # the stages, not the machine's load
 
     clean, ctrl = controller(), controller()
     q = model.home()
