@@ -124,8 +124,31 @@ class OneBlasThread:
         local.saved = []
 
 
-#: The one limiter of the solve path (entered by every solve and every control step).
+#: The one limiter of the solve path (entered by every solve and every control step whose
+#: problem is not :func:`single_threaded`, and by the parts that factorise matrices).
 one_blas_thread = OneBlasThread()
+
+#: Largest ``M * M * n`` of a problem (M stacked rows, n variables) whose solve path is left
+#: without the limit: OpenBLAS (0.3.x, every architecture) runs one thread for a matrix
+#: product of fewer than ``4 * 65536`` multiply-adds and for matrix-vector products far larger
+#: than these, and the products a solve forms outside the parts that enter the limit
+#: themselves (``A x``, the Gram matrices of a problem's rows, their Cholesky factors) take at
+#: most ``M * M * n``. A factor 4 below OpenBLAS's threshold, measured:
+#: ``tests/unit/hqp/test_linalg.py`` counts no work on OpenBLAS's threads through whole solves
+#: at this size with two threads and no limit. SVDs and least squares start threading at much
+#: smaller sizes (a 40 x 40 SVD): the parts that call them enter the limit wherever they run.
+SINGLE_THREADED_SIZE = 65536
+
+
+def single_threaded(rows: int, cols: int) -> bool:
+    """True when the products of a problem of ``rows`` x ``cols`` never run a second BLAS thread.
+
+    The solve path then skips :data:`one_blas_thread` around the whole step (its two C calls
+    per library, about 37 k instructions, would cost more than the step's products); the parts
+    that factorise matrices (the certificate's cold solves, the repair, the damping screen's
+    examination, the degenerate rows' SVD, the hard rows' least squares) enter it themselves.
+    """
+    return rows * rows * cols <= SINGLE_THREADED_SIZE
 
 
 def warm_up() -> None:
