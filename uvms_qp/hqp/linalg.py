@@ -37,6 +37,7 @@ absolute, add, divide, dot, multiply = np.absolute, np.add, np.divide, np.dot, n
 sqrt, square, subtract = np.sqrt, np.square, np.subtract
 maximum, minimum = np.maximum, np.minimum
 greater_equal, less_equal, logical_or = np.greater_equal, np.less_equal, np.logical_or
+isfinite = np.isfinite
 #: ``np.max``/``np.min`` without their Python wrappers (``initial=``, ``where=`` and ``axis=``
 #: as the ufunc's ``reduce`` takes them).
 max_of, min_of = np.maximum.reduce, np.minimum.reduce

@@ -102,12 +102,14 @@ def test_segment_max_is_the_largest_entry_of_each_segment():
 def test_the_bound_ufuncs_compute_what_numpy_computes():
     rng = np.random.default_rng(5)
     x, y = rng.standard_normal(9), rng.standard_normal(9)
+    z = np.where(x > 0.5, np.inf, np.where(x < -0.5, np.nan, x))
     pairs = {"absolute": (np.abs(x), (x,)), "sqrt": (np.sqrt(np.abs(x)), (np.abs(x),)),
              "square": (x * x, (x,)), "add": (x + y, (x, y)), "subtract": (x - y, (x, y)),
              "multiply": (x * y, (x, y)), "divide": (x / y, (x, y)),
              "maximum": (np.where(x > y, x, y), (x, y)), "minimum": (np.where(x < y, x, y), (x, y)),
              "greater_equal": (x >= y, (x, y)), "less_equal": (x <= y, (x, y)),
-             "logical_or": ((x > 0) | (y > 0), (x > 0, y > 0)), "dot": (float(x @ y), (x, y))}
+             "logical_or": ((x > 0) | (y > 0), (x > 0, y > 0)), "dot": (float(x @ y), (x, y)),
+             "isfinite": ([math.isfinite(v) for v in z], (z,))}
     for name, (expected, args) in pairs.items():
         np.testing.assert_array_equal(getattr(linalg, name)(*args), expected, err_msg=name)
 
