@@ -87,7 +87,9 @@ class OneBlasThread:
     the solve path (the solvers, the certificate's cold solves, the repair, the damping
     screen's examination) enters it without paying twice. Each thread counts its own entries
     and sets and restores the count itself (OpenBLAS does not always let one thread's setting
-    reach another's calls).
+    reach another's calls). A step of a small problem on DAQP does not enter it at all
+    (:func:`single_threaded`): its products run on one thread whatever the setting, and the
+    parts above, which factorise, enter it themselves.
     """
 
     def __init__(self) -> None:
