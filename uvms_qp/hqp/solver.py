@@ -311,7 +311,8 @@ def solve_hierarchy(
         cached = _CACHE.get(solver)
         if cached is None:
             cached = _CACHE[solver] = HierarchySolver(solver)
-        cached.weights = weights
+        if weights is not None or cached._weights is not None:
+            cached.weights = weights
         cached.deadline = math.inf if deadline is None else as_scalar(
             deadline, "deadline", positive=True, allow_inf=True)
         return cached.solve(levels, lower, upper, hard)

@@ -310,7 +310,7 @@ class DaqpBackend:
         measured on the full problem by the caller); a failed solve is tried once more after
         :meth:`reduce`.
         """
-        answer = self._solve_reduced(problem)
+        answer = self._solve_reduced(problem) if self._reductions else self._solve(problem)
         if answer.status is not _OPTIMAL and self.reduce(problem):
             # DAQP failed (a zero row with a nonzero target makes it call the hierarchy
             # infeasible): once more without the rows that are constants of their level
