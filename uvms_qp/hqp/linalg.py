@@ -43,6 +43,11 @@ isfinite = np.isfinite
 max_of, min_of = np.maximum.reduce, np.minimum.reduce
 #: The largest entry of each segment ``a[starts[i]:starts[i+1]]`` (``np.maximum.reduceat``).
 segment_max = np.maximum.reduceat
+#: ``np.concatenate`` and ``np.vdot`` without numpy's ``__array_function__`` dispatch (a Python
+#: call per use, about a third of the call on arrays of tens of entries): for plain float64
+#: arrays the solve path built itself, which no other array type can override.
+concatenate = getattr(np.concatenate, "_implementation", np.concatenate)
+vdot = getattr(np.vdot, "_implementation", np.vdot)
 #: LAPACK's divide-and-conquer SVD (``dgesdd``) and Cholesky factorisation (``dpotrf``), called
 #: without SciPy's wrappers: finite input only (a validated problem's rows; the fuzz harness
 #: drives the damping screen on degenerate levels).

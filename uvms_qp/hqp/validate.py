@@ -43,9 +43,11 @@ from .._validation import FloatArray, as_array, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
 from ..rows import Rows
 from .linalg import absolute as _ABS
+from .linalg import concatenate as _concatenate
 from .linalg import isfinite as _FINITE
 from .linalg import max_of as _MAX
 from .linalg import min_of as _MIN
+from .linalg import vdot as _vdot
 from .problem import Problem
 
 _Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]
@@ -344,12 +346,12 @@ class Validator:
             self._rows = problem.A[width:]
             self._ones = True
         if As:
-            np.concatenate(As, out=self._rows)
-        np.concatenate((lo_box, *los, hi_box, *his), out=self._flat)
+            _concatenate(As, out=self._rows)
+        _concatenate((lo_box, *los, hi_box, *his), out=self._flat)
         if not checked and not sides_and_rows_ok(problem):
             _one_by_one(levels, lower, upper, hard, width)  # raises, or a sum only looked bad
         if weighted:
-            w = np.concatenate([w if w is not None else np.ones(A.shape[0])
+            w = _concatenate([w if w is not None else np.ones(A.shape[0])
                                 for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
             if w.size and not (_MIN(w) >= _MIN_WEIGHT and _MAX(w) <= MAX_MAGNITUDE):  # (NaN)
                 _one_by_one(levels, lower, upper, hard, width)  # names the rows at fault
@@ -371,11 +373,11 @@ def finite_ok(problem: Problem) -> bool:
     finite exactly when every row entry is; a finite overflow (entries beyond ~1e154) gives a
     false alarm only, for the caller's detailed check to clear.
     """
-    v = float(np.vdot(problem.sides, problem.signs))
+    v = float(_vdot(problem.sides, problem.signs))
     if not (v == -math.inf or math.isfinite(v)):
         return False
     rows = problem.flat_rows
-    return math.isfinite(float(np.vdot(rows, rows)))
+    return math.isfinite(float(_vdot(rows, rows)))
 
 
 def sides_and_rows_ok(problem: Problem) -> bool:
@@ -389,11 +391,11 @@ def sides_and_rows_ok(problem: Problem) -> bool:
     ``inf - inf`` nor an overflow can occur any more) has a negative entry exactly where a
     lower side lies above its upper side.
     """
-    v = float(np.vdot(problem.sides, problem.signs))
+    v = float(_vdot(problem.sides, problem.signs))
     if not (v == -math.inf or math.isfinite(v)):
         return False
     rows = problem.flat_rows
-    if rows.size and not float(np.vdot(rows, rows)) <= _MAX_SQUARE:
+    if rows.size and not float(_vdot(rows, rows)) <= _MAX_SQUARE:
         return False
     size = _ABS(problem.sides)
     if not _MAX(size, axis=None, where=_FINITE(size), initial=0.0) <= MAX_MAGNITUDE:

@@ -114,6 +114,19 @@ def test_the_bound_ufuncs_compute_what_numpy_computes():
         np.testing.assert_array_equal(getattr(linalg, name)(*args), expected, err_msg=name)
 
 
+def test_concatenate_and_vdot_compute_what_numpy_computes():
+    rng = np.random.default_rng(9)
+    a, b = rng.standard_normal((3, 4)), rng.standard_normal((2, 4))
+    out = np.empty((5, 4))
+    assert linalg.concatenate((a, b), out=out) is out
+    np.testing.assert_array_equal(out, np.concatenate((a, b)))
+    np.testing.assert_array_equal(linalg.concatenate([a[0], b[1]]), np.concatenate([a[0], b[1]]))
+    sides = np.array([[1.0, -np.inf], [2.0, np.inf]])
+    signs = np.array([[1.0, 1.0], [-1.0, -1.0]])
+    assert linalg.vdot(a, a) == np.vdot(a, a)
+    assert linalg.vdot(sides, signs) == np.vdot(sides, signs) == -math.inf
+
+
 def test_gesdd_gives_numpys_singular_decomposition():
     rng = np.random.default_rng(6)
     M = rng.standard_normal((6, 4))
