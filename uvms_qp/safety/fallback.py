@@ -72,6 +72,7 @@ from ..hqp.hard_set import hard_feasible
 from ..hqp.linalg import one_blas_thread, warm_up
 from ..hqp.measure import clip_to_box, evaluate, placeholder
 from ..hqp.registry import available_solvers, get_spec
+from ..hqp.result import OK_STATUSES
 from .deadline import backend_limits
 
 PRIMARY = "primary"
@@ -187,7 +188,7 @@ class SafeSolve:
     @property
     def attempts(self) -> tuple[str, ...]:
         """One line per stage whose answer was not used (``"<stage>: <verdict> (<why>)"``)."""
-        return tuple(str(r) for r in self.record if not r.used)
+        return tuple([str(r) for r in self.record if not r.used])
 
     @property
     def solved(self) -> bool:
@@ -405,7 +406,7 @@ class SafeSolver:
         """
         problem = step.problem
         result = self._solve(self.primary, problem, PRIMARY, step)
-        if result is not None and result.ok:
+        if result is not None and result.status in OK_STATUSES:  # (result.ok, without a call)
             return result, PRIMARY, 0
         kept = step.unproven
         if kept is not None and (self.accept_unproven or _ill_posed(kept[0])):
