@@ -321,7 +321,8 @@ class Validator:
         hi_box: FloatArray | None = None
         if fast is not None and fast[1] > 0 and (given is None or given == fast[1]):
             parsed, cols, mh, weighted = fast
-            lo_inf, hi_inf, _ = self._constants(cols)
+            consts = self._last  # (the constants of the last call's width, usually this one)
+            lo_inf, hi_inf, _ = consts if consts[2].shape[0] == cols else self._constants(cols)
             # a float64 vector of the right length is taken as it is (the common case)
             if type(lower) is _ND and lower.dtype is _F64 and lower.shape == (cols,):
                 lo_box = lower
