@@ -27,6 +27,11 @@ from scipy.optimize import nnls as _scipy_nnls
 
 from .._validation import FloatArray
 
+try:  # numpy >= 2
+    from numpy._core import multiarray as _multiarray
+except ImportError:  # numpy 1.x
+    from numpy.core import multiarray as _multiarray  # type: ignore[no-redef]
+
 # -- Kernels of the solve path's hot loops, bound once -----------------------------------------
 # The solve path calls numpy's ufuncs and reductions on arrays of tens of entries, where the
 # interpreter's lookups cost as much as the arithmetic: each module of the layer takes these
@@ -48,6 +53,9 @@ segment_max = np.maximum.reduceat
 #: arrays the solve path built itself, which no other array type can override.
 concatenate = getattr(np.concatenate, "_implementation", np.concatenate)
 vdot = getattr(np.vdot, "_implementation", np.vdot)
+#: ``np.count_nonzero`` of a whole array without its Python wrapper: numpy's C function (a
+#: count of true entries costs a fraction of a ufunc reduction's set-up).
+count_nonzero = _multiarray.count_nonzero
 #: LAPACK's divide-and-conquer SVD (``dgesdd``) and Cholesky factorisation (``dpotrf``), called
 #: without SciPy's wrappers: finite input only (a validated problem's rows; the fuzz harness
 #: drives the damping screen on degenerate levels).

@@ -127,6 +127,14 @@ def test_concatenate_and_vdot_compute_what_numpy_computes():
     assert linalg.vdot(sides, signs) == np.vdot(sides, signs) == -math.inf
 
 
+def test_count_nonzero_counts_what_numpy_counts():
+    rng = np.random.default_rng(10)
+    a = rng.standard_normal((3, 5))
+    assert linalg.count_nonzero(a > 0.0) == np.count_nonzero(a > 0.0) == int((a > 0.0).sum())
+    assert linalg.count_nonzero(np.zeros(0, dtype=bool)) == 0
+    assert linalg.count_nonzero(np.isfinite(np.array([1.0, np.inf, np.nan]))) == 1
+
+
 def test_gesdd_gives_numpys_singular_decomposition():
     rng = np.random.default_rng(6)
     M = rng.standard_normal((6, 4))
