@@ -17,13 +17,24 @@ and, of those, the ones whose CPU time alone is more than 1 ms past it (the rest
 core), the steps during which the scheduler took the core away (involuntary context switches
 of this thread, ``getrusage(RUSAGE_THREAD)``), and the statuses seen.
 
-Run: ``python benchmarks/bench_deadline.py [--steps 3000] [--problems 300] [--busy-only]``.
+``--realtime PRIO`` runs the measured loops as a vehicle's control process runs: this process at
+the real-time priority ``PRIO`` (``SCHED_FIFO``, Linux; needs root or ``CAP_SYS_NICE``, like
+``chrt -f PRIO``), the load at the normal priority, the garbage collector frozen after each
+workload's set-up
+(:func:`uvms_qp.safety.prepare_realtime`), and each step started on the tick of a
+periodic loop (``--period``, default 5 ms) instead of back to back, so that the steps own a core
+when they run and the process leaves the CPU between them, as a control loop does (a real-time
+thread that never sleeps is throttled by the kernel).
+
+Run: ``python benchmarks/bench_deadline.py [--steps 3000] [--problems 300] [--busy-only]
+[--realtime 50 [--period 0.005]]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import os
 import resource
 import time
 from collections import Counter
@@ -36,10 +47,12 @@ from uvms_qp.bench.stacks import demo_stack
 from uvms_qp.controller import Controller
 from uvms_qp.hqp import normalize_problem
 from uvms_qp.model import load_model
-from uvms_qp.safety import SafeSolver
+from uvms_qp.safety import SafeSolver, prepare_realtime
 
 
 def _burn(stop: mp.Event) -> None:  # type: ignore[valid-type]
+    if hasattr(os, "sched_setscheduler"):  # the load runs at the normal priority
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     a = np.random.default_rng(0).standard_normal((300, 300))
     while not stop.is_set():  # type: ignore[attr-defined]
         a = np.tanh(a @ a.T / 300.0)
@@ -88,9 +101,18 @@ def _preemptions() -> int:
 
 
 class Steps:
-    """Wall time, CPU time and preemptions of each step, and the statuses seen."""
+    """Wall time, CPU time and preemptions of each step, and the statuses seen.
+
+    With a ``period`` [s], each step starts on the next tick of a periodic loop (sleeping until
+    it), as in a control loop; without one, steps run back to back.
+    """
+
+    period: float | None = None
 
     def __init__(self) -> None:
+        if self.period is not None:
+            prepare_realtime()  # freeze what the set-up made (the priority is already set)
+        self.next_tick: float | None = None
         self.wall: list[float] = []
         self.cpu: list[float] = []
         self.preempted: list[int] = []
@@ -98,6 +120,12 @@ class Steps:
 
     def timed(self, step: Any) -> Any:
         """Run ``step()`` and record its times."""
+        if self.period is not None:
+            now = time.perf_counter()
+            tick = now if self.next_tick is None else max(self.next_tick, now)
+            if tick > now:
+                time.sleep(tick - now)
+            self.next_tick = tick + self.period
         switches, used, began = _preemptions(), time.thread_time(), time.perf_counter()
         out = step()
         self.wall.append(time.perf_counter() - began)
@@ -164,7 +192,15 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=3000)
     ap.add_argument("--problems", type=int, default=300)
     ap.add_argument("--busy-only", action="store_true")
+    ap.add_argument("--realtime", type=int, metavar="PRIO",
+                    help="run the loops at this SCHED_FIFO priority, on a periodic loop")
+    ap.add_argument("--period", type=float, default=0.005,
+                    help="with --realtime: the loop's period [s] (default 0.005)")
     args = ap.parse_args()
+    if args.realtime is not None:
+        prepare_realtime(args.realtime)
+        Steps.period = args.period
+        print(f"SCHED_FIFO priority {args.realtime}, one step per {args.period * 1e3:g} ms")
     print("| workload | deadline [ms] | steps | wall p50 [ms] | wall p99 [ms] | wall p99.9 [ms] "
           "| wall max [ms] | CPU p50 [ms] | CPU p99 [ms] | CPU max [ms] | worst overrun [ms] | "
           "> 1 ms late | of which on CPU | steps preempted | stages/statuses |")

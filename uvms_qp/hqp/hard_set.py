@@ -53,11 +53,23 @@ def _project(problem: Problem, hard: Rows, x: FloatArray, tol: float) -> FloatAr
     return x
 
 
-def hard_feasible(problem: Problem) -> bool:
-    """Independent feasibility check of the hard box and rows (HiGHS LP through SciPy)."""
+def hard_feasible(problem: Problem, time_limit: float | None = None) -> bool:
+    """Independent feasibility check of the hard box and rows (HiGHS LP through SciPy).
+
+    Args:
+        problem: The problem whose hard set is judged.
+        time_limit: Time HiGHS may take [s] (None: no limit). An LP stopped by it has proven
+            nothing, and the hard set counts as feasible (the caller reports a back-end
+            failure, not an empty hard set).
+
+    Returns:
+        False only when the hard set is proven empty.
+    """
     if (problem.lo[:problem.head] > problem.hi[:problem.head]).any():
         return False  # an empty interval: no LP needed (and SciPy refuses such bounds)
-    return _hard_lp(problem).status != 2
+    if not problem.hard.m:
+        return True  # a box with every interval nonempty: no LP needed
+    return _hard_lp(problem, time_limit).status != 2
 
 
 def hard_point(problem: Problem) -> FloatArray | None:
@@ -68,8 +80,8 @@ def hard_point(problem: Problem) -> FloatArray | None:
     return np.asarray(res.x, dtype=np.float64) if res.status == 0 and res.x is not None else None
 
 
-def _hard_lp(problem: Problem) -> Any:
-    """``linprog`` of the zero objective over the hard box and rows."""
+def _hard_lp(problem: Problem, time_limit: float | None = None) -> Any:
+    """``linprog`` of the zero objective over the hard box and rows (within ``time_limit`` [s])."""
     hard = problem.hard
     A_ub, b_ub, A_eq, b_eq = [], [], None, None
     if hard.m:
@@ -89,4 +101,5 @@ def _hard_lp(problem: Problem) -> Any:
               for lo, hi in zip(problem.lower, problem.upper, strict=True)]
     return linprog(np.zeros(problem.n), A_ub=np.vstack(A_ub) if A_ub else None,
                    b_ub=np.concatenate(b_ub) if b_ub else None, A_eq=A_eq, b_eq=b_eq,
-                   bounds=bounds, method="highs")
+                   bounds=bounds, method="highs",
+                   options=None if time_limit is None else {"time_limit": max(time_limit, 1e-6)})

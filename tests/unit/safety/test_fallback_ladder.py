@@ -354,3 +354,24 @@ def test_a_perturbed_start_of_the_demo_is_answered_by_the_primary(tmp_path):
     _, result = simulate_run(spec, run_seed(spec.seed, 3))
     counts = result.fallback_metrics()["stage_counts"]
     assert counts.get("cold_retry", 0) == 0 and counts.get("primary", 0) == 20, counts
+
+
+def test_an_unproven_answer_is_kept_when_the_deadline_passes_in_the_last_solver_stage():
+    """The primary's answer is safe but unproven (a near-singular level the repair cannot
+    prove); the alternate then runs past the deadline. The step keeps the unproven answer (a
+    solve of this problem, inside the hard set) instead of dropping to the zero command."""
+    from uvms_qp.bench.problems import family
+
+    p = family("near_singular", 1, seed=5)[0]
+    problem = normalize_problem(p.levels_rows(), p.lower, p.upper, hard=p.hard_rows())
+    clock = FakeClock()
+    safe = SafeSolver("daqp", deadline=1.0, clock=clock)
+    inject(safe.alternate, Fault.SLEEP, count=1, sleep=2.0).sleeper = clock.advance
+    out = safe.solve(problem)
+    stages = [(r.stage, r.verdict) for r in out.record]
+    assert stages[0] == ("primary", "unproven")
+    assert any(stage.startswith("alternate") for stage, _ in stages)
+    assert out.deadline_missed
+    assert out.stage == "primary" and out.result.status is Status.UNPROVEN, stages
+    assert stages[-1] == ("primary", "kept")
+    assert np.any(out.x != 0.0) and _safe(problem, out.x)

@@ -332,7 +332,7 @@ class DaqpBackend:
             self.reset()
             # DAQP's "infeasible" covers the soft levels too (a zero row with a nonzero
             # target): the hard set is judged on its own
-            if not hard_feasible(problem):
+            if not hard_feasible(problem, self._time_left()):
                 return Answer(None, Status.HARD_INFEASIBLE,
                               "the hard box and hard rows admit no point", {"exitflag": setup.flag})
             return Answer(None, Status.BACKEND_ERROR,
@@ -371,11 +371,15 @@ class DaqpBackend:
         self.reset()  # set up afresh after a failure
         reason = _FLAGS.get(flag, "unknown failure")
         status = Status.BACKEND_ERROR
-        if not hard_feasible(problem):
+        if not hard_feasible(problem, self._time_left()):
             status = Status.HARD_INFEASIBLE
             reason = "the hard box and hard rows admit no point"
         x = np.array(raw, dtype=np.float64) if raw is not None else None
         return Answer(x, status, f"DAQP exit flag {flag}: {reason}", info)
+
+    def _time_left(self) -> float | None:
+        """Time left until the solve's end [s], or None without one (for the hard-set LP)."""
+        return None if self.end == math.inf else self.end - self.clock()
 
     def _accept(self, problem: Problem, raw: Any) -> tuple[FloatArray, Measured] | None:
         """``(x, measurement)`` when DAQP's answer holds the box and hard rows, else None.
