@@ -8,6 +8,8 @@ import numpy as np
 from scipy.optimize import linprog
 
 from .._validation import FloatArray
+from ..rows import Rows
+from .linalg import one_blas_thread
 from .problem import Problem
 
 
@@ -28,6 +30,13 @@ def polish_hard(problem: Problem, x: FloatArray) -> FloatArray:
     if not hard.m:
         return x
     tol = 1e-12 * problem.hard_scale
+    with one_blas_thread:  # (least squares: a small problem's solve runs without the limit)
+        return _project(problem, hard, x, tol)
+
+
+def _project(problem: Problem, hard: Rows, x: FloatArray, tol: float) -> FloatArray:
+    """The alternating projections of :func:`polish_hard` from ``x`` (inside the box)."""
+    lower, upper = problem.lower, problem.upper
     for _ in range(50):
         y = hard.A @ x
         s = y - np.minimum(np.maximum(y, hard.lower), hard.upper)

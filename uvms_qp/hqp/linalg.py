@@ -27,6 +27,11 @@ from scipy.optimize import nnls as _scipy_nnls
 
 from .._validation import FloatArray
 
+try:  # numpy >= 2
+    from numpy._core import multiarray as _multiarray
+except ImportError:  # numpy 1.x
+    from numpy.core import multiarray as _multiarray  # type: ignore[no-redef]
+
 # -- Kernels of the solve path's hot loops, bound once -----------------------------------------
 # The solve path calls numpy's ufuncs and reductions on arrays of tens of entries, where the
 # interpreter's lookups cost as much as the arithmetic: each module of the layer takes these
@@ -37,11 +42,20 @@ absolute, add, divide, dot, multiply = np.absolute, np.add, np.divide, np.dot, n
 sqrt, square, subtract = np.sqrt, np.square, np.subtract
 maximum, minimum = np.maximum, np.minimum
 greater_equal, less_equal, logical_or = np.greater_equal, np.less_equal, np.logical_or
+isfinite = np.isfinite
 #: ``np.max``/``np.min`` without their Python wrappers (``initial=``, ``where=`` and ``axis=``
 #: as the ufunc's ``reduce`` takes them).
 max_of, min_of = np.maximum.reduce, np.minimum.reduce
 #: The largest entry of each segment ``a[starts[i]:starts[i+1]]`` (``np.maximum.reduceat``).
 segment_max = np.maximum.reduceat
+#: ``np.concatenate`` and ``np.vdot`` without numpy's ``__array_function__`` dispatch (a Python
+#: call per use, about a third of the call on arrays of tens of entries): for plain float64
+#: arrays the solve path built itself, which no other array type can override.
+concatenate = getattr(np.concatenate, "_implementation", np.concatenate)
+vdot = getattr(np.vdot, "_implementation", np.vdot)
+#: ``np.count_nonzero`` of a whole array without its Python wrapper: numpy's C function (a
+#: count of true entries costs a fraction of a ufunc reduction's set-up).
+count_nonzero = _multiarray.count_nonzero
 #: LAPACK's divide-and-conquer SVD (``dgesdd``) and Cholesky factorisation (``dpotrf``), called
 #: without SciPy's wrappers: finite input only (a validated problem's rows; the fuzz harness
 #: drives the damping screen on degenerate levels).
@@ -86,7 +100,9 @@ class OneBlasThread:
     the solve path (the solvers, the certificate's cold solves, the repair, the damping
     screen's examination) enters it without paying twice. Each thread counts its own entries
     and sets and restores the count itself (OpenBLAS does not always let one thread's setting
-    reach another's calls).
+    reach another's calls). A step of a small problem on DAQP does not enter it at all
+    (:func:`single_threaded`): its products run on one thread whatever the setting, and the
+    parts above, which factorise, enter it themselves.
     """
 
     def __init__(self) -> None:
@@ -124,8 +140,31 @@ class OneBlasThread:
         local.saved = []
 
 
-#: The one limiter of the solve path (entered by every solve and every control step).
+#: The one limiter of the solve path (entered by every solve and every control step whose
+#: problem is not :func:`single_threaded`, and by the parts that factorise matrices).
 one_blas_thread = OneBlasThread()
+
+#: Largest ``M * M * n`` of a problem (M stacked rows, n variables) whose solve path is left
+#: without the limit: OpenBLAS (0.3.x, every architecture) runs one thread for a matrix
+#: product of fewer than ``4 * 65536`` multiply-adds and for matrix-vector products far larger
+#: than these, and the products a solve forms outside the parts that enter the limit
+#: themselves (``A x``, the Gram matrices of a problem's rows, their Cholesky factors) take at
+#: most ``M * M * n``. A factor 4 below OpenBLAS's threshold, measured:
+#: ``tests/unit/hqp/test_linalg.py`` counts no work on OpenBLAS's threads through whole solves
+#: at this size with two threads and no limit. SVDs and least squares start threading at much
+#: smaller sizes (a 40 x 40 SVD): the parts that call them enter the limit wherever they run.
+SINGLE_THREADED_SIZE = 65536
+
+
+def single_threaded(rows: int, cols: int) -> bool:
+    """True when the products of a problem of ``rows`` x ``cols`` never run a second BLAS thread.
+
+    The solve path then skips :data:`one_blas_thread` around the whole step (its two C calls
+    per library, about 37 k instructions, would cost more than the step's products); the parts
+    that factorise matrices (the certificate's cold solves, the repair, the damping screen's
+    examination, the degenerate rows' SVD, the hard rows' least squares) enter it themselves.
+    """
+    return rows * rows * cols <= SINGLE_THREADED_SIZE
 
 
 def warm_up() -> None:

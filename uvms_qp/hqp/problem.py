@@ -29,6 +29,7 @@ import numpy as np
 from .._validation import FloatArray, as_vector
 from ..errors import InputError
 from ..rows import Rows
+from .linalg import single_threaded
 
 
 def _count(value: Any, name: str, least: int) -> int:
@@ -84,6 +85,8 @@ class Problem:
         level_sides: ``sides[:, a:b]`` of each level (views).
         flat_rows: ``A[n:]`` flattened (a view: the hard and level rows in one vector).
         squares: Scratch (M,) for squared slacks.
+        single_threaded: The products of a solve of this size never run a second BLAS thread
+            (:func:`~uvms_qp.hqp.linalg.single_threaded`): a solve skips the thread limit.
 
     Raises:
         InputError: a size that is not a non-negative integer, or a bad metric.
@@ -106,6 +109,7 @@ class Problem:
         "n",
         "sides",
         "signs",
+        "single_threaded",
         "sizes",
         "spans",
         "squares",
@@ -125,6 +129,7 @@ class Problem:
         self.n, self.mh, self.head = n, mh, n + mh
         ml = sum(self.sizes)
         self.M = M = self.head + ml
+        self.single_threaded = single_threaded(M, n)
         if A is None:
             A = np.zeros((M, n))
             A[:n] = np.eye(n)

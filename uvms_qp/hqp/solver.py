@@ -201,22 +201,32 @@ class HierarchySolver:
                 :attr:`deadline`).
             repair: Repair an unproven answer (:meth:`repaired`); default :attr:`repair`.
         """
-        began = self._clock()
         if end is None:
-            end = began + self.deadline
+            end = self._clock() + self.deadline
+        if problem.single_threaded and not getattr(self.backend, "factorises", True):
+            return self._solve_problem(problem, end, repair)
         with one_blas_thread:
-            start = _wall()
-            self.backend.end = end
-            self.certifier.end = end
-            answer = self.backend.solve(problem)
-            x, message, info = answer.x, answer.message, answer.info
-            if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
-                x, message, info = _saturated(problem, x, message, info)
-            result = evaluate(problem, x, answer.status, self._name, message, info,
-                              self.level_tol, self.hard_tol, _wall() - start, answer.measured,
-                              self.certify)
-            if result.status is Status.UNPROVEN and (self.repair if repair is None else repair):
-                result = self.repaired(problem, result, end, start)
+            return self._solve_problem(problem, end, repair)
+
+    def _solve_problem(self, problem: Problem, end: float, repair: bool | None
+                       ) -> HierarchyResult:
+        """:meth:`solve_problem` on its end (inside the BLAS thread limit or not).
+
+        Without the limit when no product of the solve can thread
+        (:attr:`Problem.single_threaded`, a back-end that calls no factorisation of its own).
+        """
+        start = _wall()
+        self.backend.end = end
+        self.certifier.end = end
+        answer = self.backend.solve(problem)
+        x, message, info = answer.x, answer.message, answer.info
+        if self.saturate and answer.status in OK_STATUSES and answer.measured is None:
+            x, message, info = _saturated(problem, x, message, info)
+        result = evaluate(problem, x, answer.status, self._name, message, info,
+                          self.level_tol, self.hard_tol, _wall() - start, answer.measured,
+                          self.certify)
+        if result.status is Status.UNPROVEN and (self.repair if repair is None else repair):
+            result = self.repaired(problem, result, end, start)
         return result
 
     def repaired(self, problem: Problem, result: HierarchyResult, end: float,
@@ -301,7 +311,8 @@ def solve_hierarchy(
         cached = _CACHE.get(solver)
         if cached is None:
             cached = _CACHE[solver] = HierarchySolver(solver)
-        cached.weights = weights
+        if weights is not None or cached._weights is not None:
+            cached.weights = weights
         cached.deadline = math.inf if deadline is None else as_scalar(
             deadline, "deadline", positive=True, allow_inf=True)
         return cached.solve(levels, lower, upper, hard)

@@ -42,8 +42,13 @@ import numpy as np
 from .._validation import FloatArray, as_array, as_vector, check_bounds_order
 from ..errors import InputError, ShapeError
 from ..rows import Rows
+from .linalg import absolute as _ABS
+from .linalg import concatenate as _concatenate
+from .linalg import count_nonzero as _count
+from .linalg import isfinite as _FINITE
 from .linalg import max_of as _MAX
 from .linalg import min_of as _MIN
+from .linalg import vdot as _vdot
 from .problem import Problem
 
 _Item = tuple[FloatArray, FloatArray, FloatArray, FloatArray | None]
@@ -52,6 +57,7 @@ _Parsed = tuple[list[FloatArray], list[FloatArray], list[FloatArray], list[Float
 """Rows, lower sides, upper sides and weights of every item (hard items first), the number of
 hard items and the level sizes."""
 _F64 = np.dtype(np.float64)
+_ND = np.ndarray
 
 MAX_MAGNITUDE = 1e15
 """Largest absolute value of a finite row entry, side or box bound; weights and metric entries
@@ -90,11 +96,11 @@ def check_magnitude(values: FloatArray, name: str, *, weights: bool = False) -> 
 def _float(value: Any) -> FloatArray:
     """``value`` as a float64 array of real numbers (no copy when it is one already).
 
+    The parser tests for a float64 array itself and calls this for anything else.
+
     Raises:
         InputError: not real numbers (strings, booleans, complex numbers are not converted).
     """
-    if type(value) is np.ndarray and value.dtype is _F64:
-        return value
     return as_array(value, "value")
 
 
@@ -139,10 +145,15 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
                 if kind is tuple or kind is list:
                     if len(item) == 2:
                         A, lo = item
-                        lo = hi = _float(lo)
+                        if type(lo) is not _ND or lo.dtype is not _F64:
+                            lo = _float(lo)
+                        hi = lo
                     elif len(item) == 3:
                         A, lo, hi = item
-                        lo, hi = _float(lo), _float(hi)
+                        if type(lo) is not _ND or lo.dtype is not _F64:
+                            lo = _float(lo)
+                        if type(hi) is not _ND or hi.dtype is not _F64:
+                            hi = _float(hi)
                     else:
                         return None
                     w = None
@@ -158,7 +169,8 @@ def _fast_parse(levels: Any, hard: Any) -> tuple[_Parsed, int, int, bool] | None
                         weighted = True
                 else:
                     return None
-                A = _float(A)
+                if type(A) is not _ND or A.dtype is not _F64:
+                    A = _float(A)
             except (TypeError, ValueError):
                 return None
             shape = A.shape
@@ -270,6 +282,7 @@ class Validator:
         self._problem: Problem | None = None
         self._ones = False  # the kept problem's row weights are all ones
         self._flat = np.zeros(0)  # the kept problem's sides as one (2 M,) view
+        self._rows = np.zeros((0, 0))  # the kept problem's hard and level rows (a view)
         self._constant: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
         self._last = (np.zeros(0), np.zeros(0), np.zeros(0))
 
@@ -307,10 +320,19 @@ class Validator:
         fast = _fast_parse(levels, hard)
         lo_box: FloatArray | None = None
         hi_box: FloatArray | None = None
-        if fast is not None and fast[1] > 0 and given in (None, fast[1]):
+        if fast is not None and fast[1] > 0 and (given is None or given == fast[1]):
             parsed, cols, mh, weighted = fast
-            lo_inf, hi_inf, _ = self._constants(cols)
-            lo_box, hi_box = self._box(lower, cols, lo_inf), self._box(upper, cols, hi_inf)
+            consts = self._last  # (the constants of the last call's width, usually this one)
+            lo_inf, hi_inf, _ = consts if consts[2].shape[0] == cols else self._constants(cols)
+            # a float64 vector of the right length is taken as it is (the common case)
+            if type(lower) is _ND and lower.dtype is _F64 and lower.shape == (cols,):
+                lo_box = lower
+            else:
+                lo_box = self._box(lower, cols, lo_inf)
+            if type(upper) is _ND and upper.dtype is _F64 and upper.shape == (cols,):
+                hi_box = upper
+            else:
+                hi_box = self._box(upper, cols, hi_inf)
         checked = lo_box is None or hi_box is None
         if lo_box is None or hi_box is None:
             parsed, lo_box, hi_box = _one_by_one(levels, lower, upper, hard, given)
@@ -323,14 +345,15 @@ class Validator:
                 problem.sizes != tuple(sizes)):
             problem = self._problem = Problem(width, mh, sizes)
             self._flat = problem.sides.reshape(-1)
+            self._rows = problem.A[width:]
             self._ones = True
         if As:
-            np.concatenate(As, out=problem.A[width:])
-        np.concatenate((lo_box, *los, hi_box, *his), out=self._flat)
+            _concatenate(As, out=self._rows)
+        _concatenate((lo_box, *los, hi_box, *his), out=self._flat)
         if not checked and not sides_and_rows_ok(problem):
             _one_by_one(levels, lower, upper, hard, width)  # raises, or a sum only looked bad
         if weighted:
-            w = np.concatenate([w if w is not None else np.ones(A.shape[0])
+            w = _concatenate([w if w is not None else np.ones(A.shape[0])
                                 for A, w in zip(As[n_hard:], ws[n_hard:], strict=True)])
             if w.size and not (_MIN(w) >= _MIN_WEIGHT and _MAX(w) <= MAX_MAGNITUDE):  # (NaN)
                 _one_by_one(levels, lower, upper, hard, width)  # names the rows at fault
@@ -339,7 +362,8 @@ class Validator:
         elif not self._ones:
             problem.set_weights(None)
             self._ones = True
-        problem.W = self._constants(width)[2] if W is None else W
+        problem.W = (self._last[2] if self._last[2].shape[0] == width
+                     else self._constants(width)[2]) if W is None else W
         return problem
 
 
@@ -351,31 +375,34 @@ def finite_ok(problem: Problem) -> bool:
     finite exactly when every row entry is; a finite overflow (entries beyond ~1e154) gives a
     false alarm only, for the caller's detailed check to clear.
     """
-    v = float(np.vdot(problem.sides, problem.signs))
+    v = float(_vdot(problem.sides, problem.signs))
     if not (v == -math.inf or math.isfinite(v)):
         return False
     rows = problem.flat_rows
-    return math.isfinite(float(np.vdot(rows, rows)))
+    return math.isfinite(float(_vdot(rows, rows)))
 
 
 def sides_and_rows_ok(problem: Problem) -> bool:
     """Legitimate sides, rows within the accepted magnitudes, no lower side above its upper.
 
-    ``vdot(A, A) <= MAX_MAGNITUDE**2`` holds when every entry is in range (and is false on NaN
-    or inf); a false alarm (many entries near the limit) is cleared by the detailed check. The
-    sides' largest finite magnitude is one masked reduction.
+    Warning-free, by a dot product and counts (a ufunc reduction's set-up costs several times
+    either): ``vdot(sides, signs)`` is finite or ``-inf`` exactly when no side is NaN, no lower
+    side ``+inf`` and no upper side ``-inf``; ``A . A <= MAX_MAGNITUDE**2`` holds when every
+    row entry is in range (and is false on NaN or inf; a false alarm, many entries near the
+    limit, is cleared by the detailed check); every finite side is within the magnitude
+    exactly when as many sides are within it as are finite; then no lower side may lie above
+    its upper side.
     """
-    v = float(np.vdot(problem.sides, problem.signs))
+    v = float(_vdot(problem.sides, problem.signs))
     if not (v == -math.inf or math.isfinite(v)):
         return False
-    rows = problem.A[problem.n:]
-    if rows.size and not float(np.vdot(rows, rows)) <= _MAX_SQUARE:
+    rows = problem.flat_rows
+    if rows.size and not float(_vdot(rows, rows)) <= _MAX_SQUARE:
         return False
     sides = problem.sides
-    if not _MAX(np.abs(sides), axis=None, where=np.isfinite(sides), initial=0.0) <= (
-            MAX_MAGNITUDE):
+    if _count(_ABS(sides) <= MAX_MAGNITUDE) != _count(_FINITE(sides)):
         return False
-    return not np.count_nonzero(np.greater(problem.lo, problem.hi, out=problem.flags))
+    return not _count(problem.lo > problem.hi)
 
 
 def normalize_problem(levels: Any, lower: Any = None, upper: Any = None, weights: Any = None,

@@ -72,6 +72,7 @@ from ..hqp.hard_set import hard_feasible
 from ..hqp.linalg import one_blas_thread, warm_up
 from ..hqp.measure import clip_to_box, evaluate, placeholder
 from ..hqp.registry import available_solvers, get_spec
+from ..hqp.result import OK_STATUSES
 from .deadline import backend_limits
 
 PRIMARY = "primary"
@@ -187,7 +188,7 @@ class SafeSolve:
     @property
     def attempts(self) -> tuple[str, ...]:
         """One line per stage whose answer was not used (``"<stage>: <verdict> (<why>)"``)."""
-        return tuple(str(r) for r in self.record if not r.used)
+        return tuple([str(r) for r in self.record if not r.used])
 
     @property
     def solved(self) -> bool:
@@ -342,14 +343,24 @@ class SafeSolver:
         if start is None:
             start = self._clock()
         step = _Step(problem, start, start + self._budget)
+        if problem.single_threaded and not getattr(self.primary.backend, "factorises", True):
+            return self._ladder(step, damper)
         with one_blas_thread:
-            found = self._solver_stages(step)
-            if found is not None:
-                result, stage, dropped = found
-                out = self._damped(step, result, stage, damper)
-                if isinstance(out, SafeSolve):
-                    return out
-                return self._finish(step, result, stage, dropped)
+            return self._ladder(step, damper)
+
+    def _ladder(self, step: _Step, damper: Damper | None) -> SafeSolve:
+        """:meth:`solve` after its set-up (inside the BLAS thread limit or not).
+
+        Without the limit when no product of the primary's solve can thread (a solver stage
+        that factorises enters it itself).
+        """
+        found = self._solver_stages(step)
+        if found is not None:
+            result, stage, dropped = found
+            out = self._damped(step, result, stage, damper)
+            if isinstance(out, SafeSolve):
+                return out
+            return self._finish(step, result, stage, dropped)
         if self.strict:
             raise NoSolutionFound(
                 f"{self.name}: no verified solution ({'; '.join(map(str, step.record))})",
@@ -368,18 +379,24 @@ class SafeSolver:
         gives no proven answer.
         """
         step = _Step(problem, start, start + self._budget)
+        if problem.single_threaded and not getattr(self.primary.backend, "factorises", True):
+            return self._once(step, damper)
         with one_blas_thread:
-            if self._clock() > step.end:
-                return None
-            result = self._solve(self.primary, problem, PRIMARY, step)
-            if result is None or not result.ok:
-                return None
-            damped = self._damped(step, result, PRIMARY, damper, count=False, fallback=False)
-            if damped is _UNANSWERED:
-                return None
-            if isinstance(damped, SafeSolve):
-                return damped
-            return self._finish(step, result, PRIMARY, 0, count=False)
+            return self._once(step, damper)
+
+    def _once(self, step: _Step, damper: Damper | None) -> SafeSolve | None:
+        """:meth:`solve_once` inside the limit, or without it (as :meth:`_ladder`)."""
+        if self._clock() > step.end:
+            return None
+        result = self._solve(self.primary, step.problem, PRIMARY, step)
+        if result is None or not result.ok:
+            return None
+        damped = self._damped(step, result, PRIMARY, damper, count=False, fallback=False)
+        if damped is _UNANSWERED:
+            return None
+        if isinstance(damped, SafeSolve):
+            return damped
+        return self._finish(step, result, PRIMARY, 0, count=False)
 
     # --------------------------------------------------------------------------------- stages
     def _solver_stages(self, step: _Step) -> tuple[HierarchyResult, str, int] | None:
@@ -389,7 +406,7 @@ class SafeSolver:
         """
         problem = step.problem
         result = self._solve(self.primary, problem, PRIMARY, step)
-        if result is not None and result.ok:
+        if result is not None and result.status in OK_STATUSES:  # (result.ok, without a call)
             return result, PRIMARY, 0
         kept = step.unproven
         if kept is not None and (self.accept_unproven or _ill_posed(kept[0])):

@@ -57,6 +57,12 @@ class Backend(Protocol):
             each solve; ``inf``: none). A back-end whose solves can run long stops there and
             reports ``backend_error``.
         clock: The clock of ``end`` [s] (the solver's; a safe solver's may be a test's).
+        factorises: (optional) Its solve calls BLAS or LAPACK routines that may run threads (an SVD,
+            least squares, a QP library on BLAS): its solves always run inside
+            :data:`~uvms_qp.hqp.linalg.one_blas_thread`. False for a back-end whose own work
+            is native code without BLAS (DAQP), whose small problems then skip the limit
+            (:func:`~uvms_qp.hqp.linalg.single_threaded`); a solver reads a back-end without
+            this attribute as True.
     """
 
     spec: SolverSpec

@@ -180,6 +180,8 @@ class CascadeBackend:
             regularisation rho, default 1e-10), and back-end settings passed to qpsolvers.
     """
 
+    factorises = True  # (null spaces by SVD, least squares, QP libraries on BLAS)
+
     def __init__(self, spec: SolverSpec, options: dict[str, Any] | None = None) -> None:
         import qpsolvers
 

@@ -49,6 +49,7 @@ from ..._validation import FloatArray, as_scalar
 from ...errors import InputError
 from ..degenerate import Reduction, dependent_rows
 from ..hard_set import hard_feasible, polish_hard
+from ..linalg import one_blas_thread
 from ..linalg import segment_max as _level_max
 from ..linalg import square as _square
 from ..measure import Measured, measure
@@ -227,6 +228,8 @@ class DaqpBackend:
             fault the C calls (:mod:`uvms_qp.testing.faults`).
     """
 
+    factorises = False  # (DAQP's C calls no BLAS; the reduction's SVD enters the limit itself)
+
     def __init__(self, spec: SolverSpec, options: dict[str, Any] | None = None) -> None:
         import daqp  # noqa: F401 - fail here, at construction, if DAQP is missing
 
@@ -267,8 +270,9 @@ class DaqpBackend:
         Returns:
             True when the rows left out changed.
         """
-        drop = dependent_rows(problem.A, problem.lo, problem.hi, problem.n, problem.mh,
-                              problem.sizes)
+        with one_blas_thread:  # (SVDs: a small problem's solve runs without the limit)
+            drop = dependent_rows(problem.A, problem.lo, problem.hi, problem.n, problem.mh,
+                                  problem.sizes)
         old = self._reductions.get(problem)
         if not drop.any():
             return self._reductions.pop(problem, None) is not None
@@ -306,7 +310,7 @@ class DaqpBackend:
         measured on the full problem by the caller); a failed solve is tried once more after
         :meth:`reduce`.
         """
-        answer = self._solve_reduced(problem)
+        answer = self._solve_reduced(problem) if self._reductions else self._solve(problem)
         if answer.status is not _OPTIMAL and self.reduce(problem):
             # DAQP failed (a zero row with a nonzero target makes it call the hierarchy
             # infeasible): once more without the rows that are constants of their level

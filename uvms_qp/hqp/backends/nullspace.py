@@ -137,6 +137,8 @@ class NullspaceBackend:
             option.
     """
 
+    factorises = True  # (an SVD per level)
+
     def __init__(self, spec: SolverSpec, **options: Any) -> None:
         known = ", ".join(sorted((*_OPTIONS, "hard_tol", "level_tol")))
         for key in options:
