@@ -203,10 +203,18 @@ class HierarchySolver:
         """
         if end is None:
             end = self._clock() + self.deadline
-        if problem.single_threaded and not getattr(self.backend, "factorises", True):
+        if self.single_threaded(problem):
             return self._solve_problem(problem, end, repair)
         with one_blas_thread:
             return self._solve_problem(problem, end, repair)
+
+    def single_threaded(self, problem: Problem) -> bool:
+        """True when no product of this solver's solve of ``problem`` can run a second thread.
+
+        That is :attr:`Problem.single_threaded` with a back-end that calls no factorisation of
+        its own: the solve needs no BLAS thread limit (a part that factorises enters it itself).
+        """
+        return problem.single_threaded and not getattr(self.backend, "factorises", True)
 
     def _solve_problem(self, problem: Problem, end: float, repair: bool | None
                        ) -> HierarchyResult:

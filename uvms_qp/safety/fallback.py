@@ -343,17 +343,10 @@ class SafeSolver:
         if start is None:
             start = self._clock()
         step = _Step(problem, start, start + self._budget)
-        if self._single_threaded(problem):
+        if self.primary.single_threaded(problem):
             return self._ladder(step, damper)
         with one_blas_thread:
             return self._ladder(step, damper)
-
-    def _single_threaded(self, problem: Problem) -> bool:
-        """True when no product of the primary's solve of ``problem`` can thread.
-
-        Such a step needs no BLAS thread limit (a part that factorises enters it itself).
-        """
-        return problem.single_threaded and not getattr(self.primary.backend, "factorises", True)
 
     def _ladder(self, step: _Step, damper: Damper | None) -> SafeSolve:
         """:meth:`solve` after its set-up (inside the BLAS thread limit or not).
@@ -386,7 +379,7 @@ class SafeSolver:
         gives no proven answer.
         """
         step = _Step(problem, start, start + self._budget)
-        if self._single_threaded(problem):
+        if self.primary.single_threaded(problem):
             return self._once(step, damper)
         with one_blas_thread:
             return self._once(step, damper)
